@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: MIT
+// The `ballbar` CLI: each subcommand lives in its own cmd_*.cpp and registers itself here.
+// app/ is the composition root: the only place that prints to the operator or chooses exit codes.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace ballbar::app {
+
+/// Exit codes of the `ballbar` command (documented in docs/cli.md).
+enum ExitCode : int {
+    kExitOk = 0,
+    kExitFailure = 1,      ///< the operation failed (device lost, database error, measurement refused)
+    kExitUsage = 2,        ///< bad command line or malformed input (JSON request, readings file)
+    kExitInterrupted = 3,  ///< stopped by the operator (Ctrl-C); what was measured is stored
+};
+
+/// An error that the CLI reports as "ballbar: <message>" with the given exit code.
+class CliError : public std::runtime_error {
+  public:
+    CliError(int code, const std::string& message) : std::runtime_error(message), code_(code) {}
+    int code() const { return code_; }
+
+  private:
+    int code_;
+};
+
+/// Options every subcommand shares.
+struct Globals {
+    std::string db_path;  ///< --db PATH; empty: $XDG_DATA_HOME/ballbar/ballbar.db
+    bool color = false;   ///< stdout is a terminal and NO_COLOR is unset
+    /// Set by the parsed subcommand's callback; main() runs it after parsing and returns its code.
+    std::function<int()> action;
+};
+
+/// Adds one subcommand to `root` and, in its callback, sets `globals.action`.
+using CommandSetup = void (*)(CLI::App& root, Globals& globals);
+
+struct CommandRegistrar {
+    CommandRegistrar(std::string_view name, CommandSetup setup);
+};
+
+/// Defines and registers a subcommand's set-up function:
+///   BALLBAR_COMMAND(solve) { auto* sub = root.add_subcommand("solve", "..."); ... }
+#define BALLBAR_COMMAND(ident)                                                                               \
+    static void ballbar_setup_##ident(CLI::App& root, ::ballbar::app::Globals& globals);                     \
+    static const ::ballbar::app::CommandRegistrar ballbar_registrar_##ident(#ident, &ballbar_setup_##ident); \
+    static void ballbar_setup_##ident([[maybe_unused]] CLI::App& root,                                       \
+                                      [[maybe_unused]] ::ballbar::app::Globals& globals)
+
+/// The database path to use: --db, else $XDG_DATA_HOME/ballbar/ballbar.db, else
+/// ~/.local/share/ballbar/ballbar.db. Creates the parent directory of the default.
+std::string resolve_db_path(const Globals& globals);
+
+}  // namespace ballbar::app

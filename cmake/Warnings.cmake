@@ -1,0 +1,20 @@
+# Warnings and sanitizers applied to every target of ours (not to the Debian libraries we link).
+add_library(ballbar_warnings INTERFACE)
+target_compile_options(ballbar_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion -Wnon-virtual-dtor
+  -Wold-style-cast -Woverloaded-virtual -Wformat=2
+  $<$<BOOL:${BALLBAR_WERROR}>:-Werror>)
+
+if(BALLBAR_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+# ballbar_module(NAME ...) : a static library of ours with the usual settings.
+function(ballbar_module name)
+  add_library(${name} STATIC ${ARGN})
+  add_library(ballbar::${name} ALIAS ${name})
+  target_include_directories(${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  target_link_libraries(${name} PRIVATE ballbar_warnings)
+  set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+endfunction()

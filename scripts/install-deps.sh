@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Installs ballbar's build and test dependencies from Debian 12's packages.
+# Every package is named here with the reason it is needed; see README.md "Dependencies".
+set -euo pipefail
+
+packages=(
+  # build
+  build-essential cmake pkg-config git clang-format
+  # libraries the product links
+  libeigen3-dev        # analysis: kinematics, SSM, identification (the only dependency of analysis/)
+  libsqlite3-dev       # storage: every session in one SQLite file
+  libusb-1.0-0-dev     # device: vendor-class USB bulk link
+  libhidapi-dev        # device: USB HID link (hidraw backend)
+  libserialport-dev    # device: USB CDC serial link (port enumeration with VID/PID, modem lines)
+  libcli11-dev         # app: command line parsing
+  nlohmann-json3-dev   # app/storage: JSON in and out (solve, export, --json)
+  libfmt-dev           # app: output formatting
+  libcairo2-dev        # reports: vector PDF
+  # tests and benchmarks
+  libgtest-dev libgmock-dev   # unit and integration tests
+  libbenchmark-dev            # bench/
+  umockdev libumockdev-dev libglib2.0-dev  # fake USB/HID/tty devices so the real libraries run in tests
+  sqlite3                     # the sqlite3 shell: benchmark comparison, inspection
+  poppler-utils               # pdftotext/pdfinfo: report tests
+  clang libclang-rt-14-dev    # libFuzzer target for the protocol decoder
+)
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+echo "install-deps: all ${#packages[@]} packages present"
