@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: MIT
+// NC programs of the subset ballbar writes and runs: G90 absolute, G0 rapid, G1 feed (F mm/min),
+// G4 dwell, X Y Z A B C words (rotary in degrees in the text, radians here), comments.
+// Two dialects: Fanuc-style (G4 P<ms>, "( comment )", "%" framing, O number) and LinuxCNC
+// (G4 P<seconds>, "; comment" / "(comment)", M2 end). Parsing is pure text in, blocks out.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ballbar/analysis/types.hpp"
+
+namespace ballbar::analysis {
+
+enum class NcDialect { Fanuc, LinuxCNC };
+std::string_view to_string(NcDialect d);
+std::optional<NcDialect> parse_nc_dialect(std::string_view text);  // "fanuc", "linuxcnc"
+
+enum class NcMotion { None, Rapid, Feed, Dwell };
+
+/// One block. Axis words are optional: a block sets only the axes it names (modal absolute
+/// positions are resolved by `resolve_poses`).
+struct NcBlock {
+    int line = 0;  ///< 1-based line in the source text (0 for generated blocks)
+    NcMotion motion = NcMotion::None;
+    std::optional<double> X_mm, Y_mm, Z_mm, A_rad, B_rad, C_rad;
+    std::optional<double> feed_mm_min;
+    double dwell_s = 0;   ///< G4 only
+    std::string comment;  ///< text of a comment on the line, without delimiters
+    std::string raw;      ///< the source line, for words ballbar does not interpret (kept on rewrite)
+};
+
+struct NcProgram {
+    NcDialect dialect = NcDialect::Fanuc;
+    std::vector<NcBlock> blocks;
+};
+
+/// Error with the line number and the problem ("line 12: unknown G code G2 (ballbar runs G0, G1, G4, G90)").
+class NcError : public AnalysisError {
+  public:
+    NcError(int line, const std::string& message);
+    int line() const { return line_; }
+
+  private:
+    int line_;
+};
+
+/// Parses a program; the dialect decides how G4 P is read. Throws NcError.
+NcProgram parse_nc_program(std::string_view text, NcDialect dialect);
+
+/// Writes a program in its dialect; `parse_nc_program(write_nc_program(p), p.dialect)` gives p's
+/// motion back (axis values to 1e-4 mm / 1e-4 degree).
+std::string write_nc_program(const NcProgram& program, std::string_view title = {});
+
+/// The absolute commanded pose after each block (modal axes carried forward from `start`).
+std::vector<Pose> resolve_poses(const NcProgram& program, const Pose& start = {});
+
+}  // namespace ballbar::analysis
