@@ -27,9 +27,10 @@ struct NcBlock {
     NcMotion motion = NcMotion::None;
     std::optional<double> X_mm, Y_mm, Z_mm, A_rad, B_rad, C_rad;
     std::optional<double> feed_mm_min;
-    double dwell_s = 0;   ///< G4 only
-    std::string comment;  ///< text of a comment on the line, without delimiters
-    std::string raw;      ///< the source line, for words ballbar does not interpret (kept on rewrite)
+    double dwell_s = 0;       ///< G4 only
+    std::string comment;      ///< text of a comment on the line, without delimiters
+    std::string extra_words;  ///< machine-function words on the line (M8, S1000, T1), re-emitted on rewrite
+    std::string raw;          ///< the source line, for words ballbar does not interpret (kept on rewrite)
 };
 
 struct NcProgram {

@@ -1,0 +1,306 @@
+// SPDX-License-Identifier: MIT
+#include "ballbar/analysis/nc_program.hpp"
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+namespace ballbar::analysis {
+namespace {
+
+std::string_view trim(std::string_view s) {
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+    return s;
+}
+
+/// Removes "( ... )" comments (both dialects) and "; ..." (LinuxCNC) from a line; returns the comment text.
+std::string strip_comments(std::string& code, int line, NcDialect dialect) {
+    std::string comment;
+    std::string out;
+    out.reserve(code.size());
+    for (std::size_t i = 0; i < code.size(); ++i) {
+        const char c = code[i];
+        if (c == '(') {
+            const std::size_t end = code.find(')', i + 1);
+            if (end == std::string::npos) throw NcError(line, "comment opened with '(' is not closed");
+            if (!comment.empty()) comment += ' ';
+            comment += trim(std::string_view(code).substr(i + 1, end - i - 1));
+            i = end;
+        } else if (c == ';' && dialect == NcDialect::LinuxCNC) {
+            if (!comment.empty()) comment += ' ';
+            comment += trim(std::string_view(code).substr(i + 1));
+            break;
+        } else {
+            out += c;
+        }
+    }
+    code = std::move(out);
+    return comment;
+}
+
+double parse_number(std::string_view text, std::size_t& pos, int line, char letter) {
+    const std::size_t start = pos;
+    if (pos < text.size() && (text[pos] == '+' || text[pos] == '-')) ++pos;
+    while (pos < text.size() && (std::isdigit(static_cast<unsigned char>(text[pos])) || text[pos] == '.')) ++pos;
+    std::string_view num = text.substr(start, pos - start);
+    if (num.empty() || num == "+" || num == "-" || num == ".")
+        throw NcError(line, std::string("word ") + letter + " has no number");
+    // from_chars rejects a leading '+' and a bare leading '.', both legal in NC programs.
+    std::string buf(num);
+    if (buf.front() == '+') buf.erase(0, 1);
+    if (buf.front() == '.' || (buf.size() > 1 && buf[0] == '-' && buf[1] == '.')) buf.insert(buf.front() == '-', "0");
+    double value = 0;
+    const auto res = std::from_chars(buf.data(), buf.data() + buf.size(), value);
+    if (res.ec != std::errc() || res.ptr != buf.data() + buf.size())
+        throw NcError(line, std::string("word ") + letter + " has a malformed number '" + std::string(num) + "'");
+    return value;
+}
+
+/// Lines the writer emits itself: absolute/metric set-up and program end.
+bool is_framing(std::string_view body) {
+    return body == "G90 G21" || body == "G90" || body == "G21" || body == "G21 G90" || body == "M30" || body == "M2" ||
+           body == "M02" || body == "%";
+}
+
+bool is_integer(double v) {
+    return std::floor(v) == v;
+}
+
+NcMotion motion_for_g(double g, int line) {
+    if (g == 0) return NcMotion::Rapid;
+    if (g == 1) return NcMotion::Feed;
+    if (g == 4) return NcMotion::Dwell;
+    char num[32];
+    std::snprintf(num, sizeof num, "%g", g);
+    throw NcError(line, std::string("unsupported G code G") + num + " (ballbar runs G0, G1, G4 in G90/G21)");
+}
+
+void append_number(std::string& out, char letter, double value) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, " %c%.4f", letter, value);
+    out += buf;
+}
+
+}  // namespace
+
+NcError::NcError(int line, const std::string& message)
+    : AnalysisError("line " + std::to_string(line) + ": " + message), line_(line) {}
+
+std::string_view to_string(NcDialect d) {
+    return d == NcDialect::Fanuc ? "fanuc" : "linuxcnc";
+}
+
+std::optional<NcDialect> parse_nc_dialect(std::string_view text) {
+    if (text == "fanuc") return NcDialect::Fanuc;
+    if (text == "linuxcnc") return NcDialect::LinuxCNC;
+    return std::nullopt;
+}
+
+NcProgram parse_nc_program(std::string_view text, NcDialect dialect) {
+    NcProgram program;
+    program.dialect = dialect;
+    NcMotion modal = NcMotion::None;
+    int line_no = 0;
+    std::size_t pos = 0;
+    while (pos <= text.size()) {
+        std::size_t end = text.find('\n', pos);
+        if (end == std::string_view::npos) end = text.size();
+        std::string_view raw = text.substr(pos, end - pos);
+        pos = end + 1;
+        ++line_no;
+        if (!raw.empty() && raw.back() == '\r') raw.remove_suffix(1);
+        if (end == text.size() && raw.empty()) break;
+
+        NcBlock block;
+        block.line = line_no;
+        block.raw = std::string(raw);
+        std::string code(raw);
+        block.comment = strip_comments(code, line_no, dialect);
+        std::string_view body = trim(code);
+        if (body == "%") continue;  // Fanuc tape framing
+        if (!body.empty() && (body.front() == 'O' || body.front() == 'o') && dialect == NcDialect::Fanuc) {
+            continue;  // program number
+        }
+
+        std::optional<double> p_word;
+        bool has_axis = false;
+        bool has_g_motion = false;
+        std::size_t i = 0;
+        while (i < body.size()) {
+            const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(body[i])));
+            if (std::isspace(static_cast<unsigned char>(c))) {
+                ++i;
+                continue;
+            }
+            if (!std::isalpha(static_cast<unsigned char>(c)))
+                throw NcError(line_no, std::string("unexpected character '") + body[i] + "'");
+            ++i;
+            while (i < body.size() && body[i] == ' ') ++i;
+            const double v = parse_number(body, i, line_no, c);
+            switch (c) {
+                case 'N':
+                    break;  // sequence number
+                case 'G':
+                    if (v == 90 || v == 21 || v == 17 || v == 94 || v == 40 || v == 49 || v == 80) break;
+                    if (v == 91) throw NcError(line_no, "G91 (incremental) is not supported: ballbar programs are G90");
+                    if (v == 20)
+                        throw NcError(line_no, "G20 (inch) is not supported: ballbar programs are in mm (G21)");
+                    block.motion = motion_for_g(v, line_no);
+                    has_g_motion = true;
+                    if (block.motion != NcMotion::Dwell) modal = block.motion;
+                    break;
+                case 'M':
+                case 'S':
+                case 'T': {
+                    // Machine functions (coolant, spindle, tool change): not simulated, kept on rewrite.
+                    if (c != 'S' && !is_integer(v))
+                        throw NcError(line_no, std::string(1, c) + " word must be an integer");
+                    char word[40];
+                    std::snprintf(word, sizeof word, "%c%g", c, v);
+                    if (!block.extra_words.empty()) block.extra_words += ' ';
+                    block.extra_words += word;
+                    break;
+                }
+                case 'X':
+                    block.X_mm = v;
+                    has_axis = true;
+                    break;
+                case 'Y':
+                    block.Y_mm = v;
+                    has_axis = true;
+                    break;
+                case 'Z':
+                    block.Z_mm = v;
+                    has_axis = true;
+                    break;
+                case 'A':
+                    block.A_rad = deg_to_rad(v);
+                    has_axis = true;
+                    break;
+                case 'B':
+                    block.B_rad = deg_to_rad(v);
+                    has_axis = true;
+                    break;
+                case 'C':
+                    block.C_rad = deg_to_rad(v);
+                    has_axis = true;
+                    break;
+                case 'F':
+                    if (v <= 0) throw NcError(line_no, "feed F must be positive");
+                    block.feed_mm_min = v;
+                    break;
+                case 'P':
+                    p_word = v;
+                    break;
+                default:
+                    throw NcError(line_no, std::string("unsupported word ") + c);
+            }
+        }
+        if (block.motion == NcMotion::Dwell) {
+            if (!p_word) throw NcError(line_no, "G4 needs a P word (dwell time)");
+            if (*p_word < 0) throw NcError(line_no, "G4 dwell time must not be negative");
+            // Fanuc: P in milliseconds; LinuxCNC: P in seconds.
+            block.dwell_s = dialect == NcDialect::Fanuc ? *p_word / 1000.0 : *p_word;
+            if (has_axis) throw NcError(line_no, "G4 with axis words: dwell and motion must be separate blocks");
+        } else if (p_word) {
+            throw NcError(line_no, "P word outside a G4 dwell");
+        }
+        if (has_axis && !has_g_motion) {
+            if (modal == NcMotion::None) throw NcError(line_no, "axis words before any G0/G1");
+            block.motion = modal;
+        }
+        if (block.motion == NcMotion::None && block.comment.empty() && trim(code).empty()) continue;
+        program.blocks.push_back(std::move(block));
+    }
+    return program;
+}
+
+std::string write_nc_program(const NcProgram& program, std::string_view title) {
+    std::string out;
+    const bool fanuc = program.dialect == NcDialect::Fanuc;
+    if (fanuc) {
+        out += "%\nO0001";
+        if (!title.empty()) out += " (" + std::string(title) + ")";
+        out += '\n';
+    } else if (!title.empty()) {
+        out += "(" + std::string(title) + ")\n";
+    }
+    out += "G90 G21\n";
+    for (const auto& b : program.blocks) {
+        std::string line;
+        if (b.motion == NcMotion::None && !b.raw.empty()) {
+            // A block ballbar does not interpret (M3 S1000, T1 M6, ...): kept verbatim, except the
+            // framing this writer adds itself.
+            std::string code = b.raw;
+            strip_comments(code, b.line, program.dialect);
+            const std::string_view body = trim(code);
+            if (!body.empty()) {
+                if (!is_framing(body)) {
+                    out += trim(b.raw);
+                    out += '\n';
+                }
+                continue;
+            }
+        }
+        switch (b.motion) {
+            case NcMotion::Rapid:
+                line = "G0";
+                break;
+            case NcMotion::Feed:
+                line = "G1";
+                break;
+            case NcMotion::Dwell: {
+                char buf[48];
+                if (fanuc)
+                    std::snprintf(buf, sizeof buf, "G4 P%.0f", std::round(b.dwell_s * 1000.0));
+                else
+                    std::snprintf(buf, sizeof buf, "G4 P%.3f", b.dwell_s);
+                line = buf;
+                break;
+            }
+            case NcMotion::None:
+                break;
+        }
+        if (b.X_mm) append_number(line, 'X', *b.X_mm);
+        if (b.Y_mm) append_number(line, 'Y', *b.Y_mm);
+        if (b.Z_mm) append_number(line, 'Z', *b.Z_mm);
+        if (b.A_rad) append_number(line, 'A', rad_to_deg(*b.A_rad));
+        if (b.B_rad) append_number(line, 'B', rad_to_deg(*b.B_rad));
+        if (b.C_rad) append_number(line, 'C', rad_to_deg(*b.C_rad));
+        if (!b.extra_words.empty()) line += ' ' + b.extra_words;
+        if (b.feed_mm_min && b.motion == NcMotion::Feed) {
+            char buf[32];
+            std::snprintf(buf, sizeof buf, " F%.1f", *b.feed_mm_min);
+            line += buf;
+        }
+        if (!b.comment.empty()) {
+            if (!line.empty()) line += ' ';
+            line += "(" + b.comment + ")";
+        }
+        if (line.empty()) continue;
+        out += line;
+        out += '\n';
+    }
+    out += fanuc ? "M30\n%\n" : "M2\n";
+    return out;
+}
+
+std::vector<Pose> resolve_poses(const NcProgram& program, const Pose& start) {
+    std::vector<Pose> poses;
+    poses.reserve(program.blocks.size());
+    Pose p = start;
+    for (const auto& b : program.blocks) {
+        if (b.X_mm) p.X_mm = *b.X_mm;
+        if (b.Y_mm) p.Y_mm = *b.Y_mm;
+        if (b.Z_mm) p.Z_mm = *b.Z_mm;
+        if (b.A_rad) p.A_rad = *b.A_rad;
+        if (b.B_rad) p.B_rad = *b.B_rad;
+        if (b.C_rad) p.C_rad = *b.C_rad;
+        poses.push_back(p);
+    }
+    return poses;
+}
+
+}  // namespace ballbar::analysis

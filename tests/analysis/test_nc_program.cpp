@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: MIT
+#include <gtest/gtest.h>
+
+#include "ballbar/analysis/nc_program.hpp"
+
+namespace ba = ballbar::analysis;
+
+TEST(NcProgram, ParsesFanucDwellInMillisecondsAndModalMotion) {
+    const auto p = ba::parse_nc_program(
+        "%\nO0001 (SSM)\nG90 G21\nG0 X10 Y-20.5 Z.5 A30 C-45 (start)\nG1 X11 F500\nY3\nG4 P1500\nM30\n%\n",
+        ba::NcDialect::Fanuc);
+    ASSERT_EQ(p.blocks.size(), 6u);  // G90 G21, G0, G1, modal G1, G4, M30
+    EXPECT_EQ(p.blocks[1].motion, ba::NcMotion::Rapid);
+    EXPECT_DOUBLE_EQ(*p.blocks[1].Z_mm, 0.5);
+    EXPECT_NEAR(*p.blocks[1].A_rad, ba::deg_to_rad(30), 1e-15);
+    EXPECT_EQ(p.blocks[1].comment, "start");
+    EXPECT_EQ(p.blocks[2].motion, ba::NcMotion::Feed);
+    EXPECT_DOUBLE_EQ(*p.blocks[2].feed_mm_min, 500);
+    EXPECT_EQ(p.blocks[3].motion, ba::NcMotion::Feed);  // modal
+    EXPECT_EQ(p.blocks[4].motion, ba::NcMotion::Dwell);
+    EXPECT_DOUBLE_EQ(p.blocks[4].dwell_s, 1.5);
+    const auto poses = ba::resolve_poses(p);
+    EXPECT_DOUBLE_EQ(poses[3].X_mm, 11);
+    EXPECT_DOUBLE_EQ(poses[3].Y_mm, 3);
+    EXPECT_DOUBLE_EQ(poses[3].Z_mm, 0.5);
+    EXPECT_NEAR(poses[3].C_rad, ba::deg_to_rad(-45), 1e-15);
+}
+
+TEST(NcProgram, ParsesLinuxCncDwellInSecondsAndSemicolonComments) {
+    const auto p = ba::parse_nc_program("G90\nG0 X1 B15 ; approach\nG4 P2.5\nM2\n", ba::NcDialect::LinuxCNC);
+    ASSERT_EQ(p.blocks.size(), 4u);
+    EXPECT_EQ(p.blocks[1].comment, "approach");
+    EXPECT_DOUBLE_EQ(p.blocks[2].dwell_s, 2.5);
+}
+
+TEST(NcProgram, WriteThenParseRoundTripsBothDialects) {
+    for (auto dialect : {ba::NcDialect::Fanuc, ba::NcDialect::LinuxCNC}) {
+        ba::NcProgram p;
+        p.dialect = dialect;
+        ba::NcBlock a;
+        a.motion = ba::NcMotion::Rapid;
+        a.X_mm = -49.2751;
+        a.Y_mm = 14.312;
+        a.Z_mm = -177.777;
+        a.A_rad = ba::deg_to_rad(10);
+        a.C_rad = ba::deg_to_rad(-30.5);
+        a.comment = "location 1 point 0";
+        ba::NcBlock d;
+        d.motion = ba::NcMotion::Dwell;
+        d.dwell_s = 2.0;
+        ba::NcBlock f;
+        f.motion = ba::NcMotion::Feed;
+        f.X_mm = 1;
+        f.feed_mm_min = 1000;
+        p.blocks = {a, d, f};
+        const auto back = ba::parse_nc_program(ba::write_nc_program(p, "test"), dialect);
+        std::vector<ba::NcBlock> motion;
+        for (const auto& b : back.blocks)
+            if (b.motion != ba::NcMotion::None) motion.push_back(b);
+        ASSERT_EQ(motion.size(), 3u) << ba::write_nc_program(p, "test");
+        EXPECT_NEAR(*motion[0].X_mm, -49.2751, 1e-4);
+        EXPECT_NEAR(*motion[0].C_rad, ba::deg_to_rad(-30.5), ba::deg_to_rad(1e-4));
+        EXPECT_EQ(motion[0].comment, "location 1 point 0");
+        EXPECT_DOUBLE_EQ(motion[1].dwell_s, 2.0);
+        EXPECT_DOUBLE_EQ(*motion[2].feed_mm_min, 1000);
+    }
+}
+
+TEST(NcProgram, KeepsUninterpretedBlocksOnRewrite) {
+    const auto p = ba::parse_nc_program("G90 G21\nT1 M6\nM3 S1000\nG0 X1\nG1 X2 F100 M8\nM30\n", ba::NcDialect::Fanuc);
+    const std::string out = ba::write_nc_program(p);
+    EXPECT_NE(out.find("T1 M6\n"), std::string::npos) << out;
+    EXPECT_NE(out.find("M3 S1000\n"), std::string::npos) << out;
+    EXPECT_NE(out.find("G1 X2.0000 M8 F100.0\n"), std::string::npos) << out;
+    EXPECT_EQ(out.find("M30"), out.rfind("M30")) << "program end written once:\n" << out;
+}
+
+TEST(NcProgram, RefusesWhatItCannotRunWithTheLine) {
+    struct Bad {
+        const char* text;
+        const char* says;
+        int line;
+    };
+    const Bad bad[] = {
+        {"G90\nG2 X1 Y1 I1\n", "unsupported G code G2", 2},
+        {"G91\n", "G91", 1},
+        {"G20\n", "inch", 1},
+        {"G0 X1\nG4\n", "needs a P word", 2},
+        {"X1\n", "before any G0/G1", 1},
+        {"G0 X1..2\n", "malformed number", 1},
+        {"G0 X\n", "has no number", 1},
+        {"G0 X1 (open\n", "not closed", 1},
+        {"G0 X1\nG1 F-5 X2\n", "positive", 2},
+        {"G0 X1 P5\n", "P word outside", 1},
+        {"G0 X1 #3\n", "unexpected character", 1},
+    };
+    for (const auto& b : bad) {
+        try {
+            ba::parse_nc_program(b.text, ba::NcDialect::Fanuc);
+            ADD_FAILURE() << "accepted: " << b.text;
+        } catch (const ba::NcError& e) {
+            EXPECT_EQ(e.line(), b.line) << b.text;
+            EXPECT_NE(std::string(e.what()).find(b.says), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("line " + std::to_string(b.line)), std::string::npos) << e.what();
+        }
+    }
+}
