@@ -1,0 +1,110 @@
+// SPDX-License-Identifier: MIT
+// The discovery workflow (docs/discovery.md): fit the current model to the readings (through
+// identify.hpp's fit_error_model), look at where the residuals disagree, test every candidate effect
+// of the library with a linearised score test around the current fit, add the one that passes the
+// criterion best, refit, and repeat until no candidate passes.
+//
+// Criterion: a nested-model F-test of one added parameter, Bonferroni-corrected over the candidates of
+// the step so that a step with no real effect names one with probability `family_alpha` at most.
+// Confounding: a candidate whose Jacobian column lies (nearly) in the span of the model's columns is
+// unidentifiable with these readings; candidates whose columns (after the model is projected out)
+// are nearly parallel are reported together as confounded.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "ballbar/analysis/effects.hpp"
+#include "ballbar/analysis/identify.hpp"
+#include "ballbar/analysis/reading.hpp"
+
+namespace ballbar::analysis {
+
+struct DiscoveryOptions {
+    /// The model to start from; empty: the base model (rotary_params_for(type)).
+    std::vector<Param> base_model;
+    /// Probability that one step names an effect when the readings hold none (family-wise, over all
+    /// candidates of the step).
+    double family_alpha = 0.01;
+    /// A candidate whose column keeps less than this fraction of its norm once the model's columns are
+    /// projected out cannot be told apart from the model (sqrt(1 − R²)).
+    double min_independence = 0.02;
+    /// Two candidates whose projected columns have |cos| above this are confounded with each other.
+    double confound_cos = 0.98;
+    int max_steps = 12;
+};
+
+/// Per-reading variables residuals are analysed against. Columns: time_s, bar_temp_C, X_mm, Y_mm,
+/// Z_mm, first rotary (rad), second rotary (rad), bar direction u_x, u_y, u_z (nominal, machine frame).
+Eigen::MatrixXd explaining_variables(const ReadingSet& readings);
+
+/// How well one variable explains a residual series: R² of the directional trend
+/// r ≈ v·(c0 + c·u) (for `bar_direction`: r ≈ c0 + c·u), and the binned trend of r against v.
+struct VariableTrend {
+    ExplainingVariable variable;
+    double r2 = 0;                                           ///< 0..1, fraction of the residual's sum of squares
+    std::vector<double> bin_centre, bin_mean_mm, bin_count;  ///< 8 quantile bins (empty for bar_direction)
+};
+
+struct ResidualAnalysis {
+    Eigen::VectorXd residual_mm;  ///< measured − predicted per reading
+    double rms_mm = 0;
+    std::array<VariableTrend, kExplainingVariableCount> trends;
+    ExplainingVariable best = ExplainingVariable::bar_direction;  ///< highest r2
+};
+
+/// Analyses `residual_mm` against `variables` (from explaining_variables()).
+ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables);
+
+/// One candidate's score in one step.
+struct CandidateScore {
+    const Effect* effect = nullptr;
+    double independence = 0;   ///< sqrt(1 − R²) of its column against the model's
+    double delta_rss_mm2 = 0;  ///< linearised drop of the residual sum of squares
+    double f = 0;              ///< F statistic (1, n − p − 1)
+    double p_value = 1;
+    bool passes = false;
+};
+
+struct DiscoveryStep {
+    const Effect* effect = nullptr;
+    double estimate = 0;   ///< in the effect's unit
+    double std_error = 0;  ///< its standard uncertainty
+    double rms_before_mm = 0, rms_after_mm = 0;
+    std::string criterion;  ///< "F"
+    double value = 0;       ///< F statistic of the refitted model against the previous one
+    double p_value = 1;
+    ExplainingVariable explained_by = ExplainingVariable::bar_direction;
+    std::vector<CandidateScore> candidates;  ///< every candidate of the step, best first
+};
+
+struct DiscoveryResult {
+    MachineType type = MachineType::TTTRR;
+    std::vector<Param> base_model;   ///< the base model as fitted (unobservable ones left out)
+    std::vector<Param> final_model;  ///< base model plus the steps' parameters
+    double rms_initial_mm = 0;       ///< after fitting the base model
+    double rms_final_mm = 0;
+    std::vector<DiscoveryStep> steps;
+    /// Groups of names the data cannot tell apart (effect ids, parameter names, "socket<k>.z").
+    std::vector<std::vector<std::string>> confounded;
+    /// Parameters and effects the readings cannot determine (names as in `confounded`).
+    std::vector<std::string> unidentifiable;
+    std::string criterion_text;  ///< e.g. "F-test, family-wise false-alarm rate 0.01 (Bonferroni over 10)"
+    FitSummary final_fit;
+    ResidualAnalysis initial_residuals, final_residuals;
+    Eigen::MatrixXd variables;  ///< explaining_variables() of the readings (rows as the residuals)
+};
+
+/// The workflow. Throws AnalysisError for readings it cannot fit (too few, inconsistent machine).
+DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& options = {});
+
+/// Upper tail of the F distribution, P(F(d1, d2) > f), through the regularized incomplete beta function.
+double f_distribution_sf(double f, double d1, double d2);
+/// Regularized incomplete beta function I_x(a, b).
+double incomplete_beta(double a, double b, double x);
+
+}  // namespace ballbar::analysis

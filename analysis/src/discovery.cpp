@@ -1,0 +1,401 @@
+// SPDX-License-Identifier: MIT
+// The discovery loop: base fit → linearised score test of every candidate → refit of the winner.
+// Then the residual analysis (directional trends against the explaining variables) and the F
+// distribution's tail.
+#include "ballbar/analysis/discovery.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "ballbar/analysis/kinematics.hpp"
+
+namespace ballbar::analysis {
+namespace {
+
+/// Pseudo-inverse of a symmetric positive semi-definite matrix with unit diagonal (a correlation-like
+/// Gram matrix of unit columns): eigenvalues below `tol` are treated as zero.
+Eigen::MatrixXd pinv_psd(const Eigen::MatrixXd& g, double tol = 1e-12) {
+    if (g.rows() == 0) return g;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(g);
+    Eigen::VectorXd inv = es.eigenvalues();
+    for (Eigen::Index i = 0; i < inv.size(); ++i) inv[i] = inv[i] > tol ? 1.0 / inv[i] : 0.0;
+    return es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
+}
+
+/// Names of the columns of the discovery Jacobian: the parameters, then socket<k>.x/y/z.
+std::string column_name(std::span<const Param> params, Eigen::Index col) {
+    const auto p = static_cast<std::size_t>(col);
+    if (p < params.size()) return std::string(param_info(params[p]).name);
+    const std::size_t s = p - params.size();
+    return "socket" + std::to_string(s / 3) + "." + "xyz"[s % 3];
+}
+
+void add_group(std::vector<std::vector<std::string>>& groups, std::vector<std::string> group) {
+    std::sort(group.begin() + 1, group.end());
+    for (const auto& g : groups)
+        if (g == group) return;
+    groups.push_back(std::move(group));
+}
+
+/// The linear algebra of one step, on the Gram matrix of the unit-scaled Jacobian columns.
+struct Projection {
+    std::vector<Eigen::Index> model;  ///< columns in the current model
+    Eigen::MatrixXd gmm_pinv;         ///< (G_MM)^+
+
+    Projection(const Eigen::MatrixXd& gram, std::vector<Eigen::Index> cols) : model(std::move(cols)) {
+        Eigen::MatrixXd gmm(model.size(), model.size());
+        for (std::size_t i = 0; i < model.size(); ++i)
+            for (std::size_t j = 0; j < model.size(); ++j) gmm(i, j) = gram(model[i], model[j]);
+        gmm_pinv = pinv_psd(gmm);
+    }
+    Eigen::VectorXd cross(const Eigen::MatrixXd& gram, Eigen::Index c) const {
+        Eigen::VectorXd v(model.size());
+        for (std::size_t i = 0; i < model.size(); ++i) v[i] = gram(model[i], c);
+        return v;
+    }
+    Eigen::VectorXd model_part(const Eigen::VectorXd& g) const {
+        Eigen::VectorXd v(model.size());
+        for (std::size_t i = 0; i < model.size(); ++i) v[i] = g[model[i]];
+        return v;
+    }
+    /// Inner product of columns a and b after the model's columns are projected out.
+    double inner(const Eigen::MatrixXd& gram, Eigen::Index a, Eigen::Index b) const {
+        return gram(a, b) - cross(gram, a).dot(gmm_pinv * cross(gram, b));
+    }
+};
+
+struct StepContext {
+    const ReadingSet& readings;
+    const DiscoveryOptions& options;
+    std::vector<Param> columns;  ///< the Jacobian's parameter columns (model and candidates)
+    Eigen::MatrixXd jac;         ///< unit-scaled columns
+    Eigen::MatrixXd gram;
+    Eigen::MatrixXd variables;
+};
+
+Eigen::Index column_of(const StepContext& ctx, Param p) {
+    const auto it = std::find(ctx.columns.begin(), ctx.columns.end(), p);
+    return static_cast<Eigen::Index>(it - ctx.columns.begin());
+}
+
+std::vector<Eigen::Index> model_columns(const StepContext& ctx, const FitSummary& fit) {
+    std::vector<Eigen::Index> out;
+    for (std::size_t idx : fit.fitted) {
+        const ParamEstimate& e = fit.estimates[idx];
+        if (e.param)
+            out.push_back(column_of(ctx, *e.param));
+        else
+            out.push_back(static_cast<Eigen::Index>(ctx.columns.size()) + 3 * e.socket + e.axis);
+    }
+    return out;
+}
+
+Eigen::VectorXd residuals_of(const ReadingSet& readings, const FitSummary& fit) {
+    std::vector<Vec3> offsets;
+    for (const auto& s : fit.sockets) offsets.push_back(s.offset_mm);
+    return reading_residuals(readings, fit.model, offsets);
+}
+
+FitSummary fit_model(const ReadingSet& readings, const std::vector<Param>& model, const ErrorParams& start) {
+    FitOptions fo;
+    fo.free_params = model;
+    fo.fixed = start;
+    return fit_error_model(readings, fo);
+}
+
+double explained_r2(const Eigen::VectorXd& r, const Eigen::MatrixXd& vars, ExplainingVariable v);
+
+}  // namespace
+
+DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& options) {
+    const MachineType type = readings.machine.type;
+    DiscoveryResult out;
+    out.type = type;
+    const auto n = static_cast<Eigen::Index>(readings.readings.size());
+
+    // 1. The base model, with the parameters the data cannot determine left out.
+    std::vector<Param> requested = options.base_model.empty() ? rotary_params_for(type) : options.base_model;
+    FitSummary fit = fit_model(readings, requested, ErrorParams{});
+    std::vector<Param> model;
+    for (const ParamEstimate& e : fit.estimates) {
+        if (!e.observable) {
+            out.unidentifiable.push_back(e.name);
+            continue;
+        }
+        if (e.param) model.push_back(*e.param);
+    }
+    if (model.size() != requested.size()) fit = fit_model(readings, model, fit.model);
+    out.base_model = model;
+
+    // 2. One Jacobian over the model and every candidate, at the base fit; unit-scaled columns.
+    StepContext ctx{readings, options, model, {}, {}, explaining_variables(readings)};
+    std::vector<const Effect*> candidates = candidate_effects(type, requested);
+    for (const Effect* c : candidates) ctx.columns.push_back(c->param);
+    {
+        std::vector<Vec3> offsets;
+        for (const auto& s : fit.sockets) offsets.push_back(s.offset_mm);
+        ctx.jac = reading_jacobian(readings, fit.model, ctx.columns, offsets, true);
+    }
+    for (Eigen::Index j = 0; j < ctx.jac.cols(); ++j) {
+        const double norm = ctx.jac.col(j).norm();
+        if (norm > 0) ctx.jac.col(j) /= norm;
+    }
+    ctx.gram = ctx.jac.transpose() * ctx.jac;
+
+    Eigen::VectorXd r = residuals_of(readings, fit);
+    out.rms_initial_mm = fit.residual_rms_mm;
+    out.initial_residuals = analyse_residuals(r, ctx.variables);
+
+    std::vector<const Effect*> open = candidates;  // still to test
+    for (int step = 0; step < options.max_steps && !open.empty(); ++step) {
+        const Projection proj(ctx.gram, model_columns(ctx, fit));
+        const Eigen::VectorXd g = ctx.jac.transpose() * r;
+        const Eigen::VectorXd gm = proj.gmm_pinv * proj.model_part(g);
+        const double rss = r.squaredNorm();
+        const auto p = static_cast<double>(proj.model.size());
+        const double dof = static_cast<double>(n) - p - 1.0;
+        if (dof < 1) break;
+
+        // Score every open candidate; those the model absorbs are unidentifiable.
+        std::vector<CandidateScore> scores;
+        for (auto it = open.begin(); it != open.end();) {
+            const Eigen::Index c = column_of(ctx, (*it)->param);
+            const double pn = std::max(0.0, proj.inner(ctx.gram, c, c));
+            CandidateScore s{*it, std::sqrt(pn / std::max(ctx.gram(c, c), 1e-300)), 0, 0, 1, false};
+            if (ctx.gram(c, c) == 0 || s.independence < options.min_independence) {
+                out.unidentifiable.push_back(std::string((*it)->id));
+                // Name the model columns it is made of.
+                const Eigen::VectorXd beta = proj.gmm_pinv * proj.cross(ctx.gram, c);
+                const double big = beta.cwiseAbs().maxCoeff();
+                std::vector<std::string> group{std::string((*it)->id)};
+                for (std::size_t i = 0; i < proj.model.size(); ++i)
+                    if (big > 0 && std::abs(beta[static_cast<Eigen::Index>(i)]) >= 0.1 * big)
+                        group.push_back(column_name(ctx.columns, proj.model[i]));
+                if (group.size() > 1) add_group(out.confounded, group);
+                it = open.erase(it);
+                continue;
+            }
+            const double t = g[c] - proj.cross(ctx.gram, c).dot(gm);
+            s.delta_rss_mm2 = std::min(t * t / pn, rss);
+            s.f = s.delta_rss_mm2 / std::max((rss - s.delta_rss_mm2) / dof, 1e-300);
+            s.p_value = f_distribution_sf(s.f, 1.0, dof);
+            scores.push_back(s);
+            ++it;
+        }
+        if (scores.empty()) break;
+        const double alpha = options.family_alpha / static_cast<double>(scores.size());
+        for (auto& s : scores) s.passes = s.p_value < alpha;
+        std::sort(scores.begin(), scores.end(), [](const auto& a, const auto& b) { return a.f > b.f; });
+        if (!scores.front().passes) break;
+        const Effect* winner = scores.front().effect;
+
+        // Candidates the data cannot tell apart from the winner are reported with it.
+        const Eigen::Index w = column_of(ctx, winner->param);
+        std::vector<std::string> group{std::string(winner->id)};
+        for (const auto& s : scores) {
+            if (s.effect == winner) continue;
+            const Eigen::Index d = column_of(ctx, s.effect->param);
+            const double cosine =
+                proj.inner(ctx.gram, w, d) / std::sqrt(proj.inner(ctx.gram, w, w) * proj.inner(ctx.gram, d, d));
+            if (std::abs(cosine) > options.confound_cos) group.push_back(std::string(s.effect->id));
+        }
+        if (group.size() > 1) add_group(out.confounded, group);
+
+        // Refit with the winner; the refitted model's F statistic confirms it.
+        std::vector<Param> extended = model;
+        extended.push_back(winner->param);
+        FitSummary refit = fit_model(readings, extended, fit.model);
+        const ParamEstimate* est = refit.find(param_info(winner->param).name);
+        open.erase(std::find(open.begin(), open.end(), winner));
+        if (!est || !est->observable) {
+            out.unidentifiable.push_back(std::string(winner->id));
+            continue;
+        }
+        const Eigen::VectorXd r_new = residuals_of(readings, refit);
+        const double rss_new = r_new.squaredNorm();
+        const double dof_new = static_cast<double>(refit.degrees_of_freedom);
+        DiscoveryStep st;
+        st.effect = winner;
+        st.estimate = est->estimate;
+        st.std_error = est->std;
+        st.rms_before_mm = std::sqrt(rss / static_cast<double>(n));
+        st.rms_after_mm = std::sqrt(rss_new / static_cast<double>(n));
+        st.criterion = "F";
+        st.value = (rss - rss_new) / std::max(rss_new / std::max(dof_new, 1.0), 1e-300);
+        st.p_value = f_distribution_sf(st.value, 1.0, dof_new);
+        if (!(st.p_value < alpha)) continue;  // the full refit does not confirm the linearised score
+        const Eigen::VectorXd closed = r - r_new;
+        double best = -1;
+        for (std::size_t v = 0; v < kExplainingVariableCount; ++v) {
+            const double r2 = explained_r2(closed, ctx.variables, static_cast<ExplainingVariable>(v));
+            if (r2 > best) {
+                best = r2;
+                st.explained_by = static_cast<ExplainingVariable>(v);
+            }
+        }
+        st.candidates = std::move(scores);
+        out.steps.push_back(std::move(st));
+        model = std::move(extended);
+        fit = std::move(refit);
+        r = r_new;
+    }
+
+    out.final_model = model;
+    out.rms_final_mm = fit.residual_rms_mm;
+    out.final_residuals = analyse_residuals(r, ctx.variables);
+    out.criterion_text = "F-test of one added parameter, family-wise false-alarm rate " +
+                         std::to_string(options.family_alpha) + " per step (Bonferroni over the candidates)";
+    out.final_fit = std::move(fit);
+    out.variables = std::move(ctx.variables);
+    return out;
+}
+
+// ---- Residual analysis ----------------------------------------------------------------------------
+
+Eigen::MatrixXd explaining_variables(const ReadingSet& readings) {
+    const auto n = static_cast<Eigen::Index>(readings.readings.size());
+    Eigen::MatrixXd v(n, 10);
+    const bool second_is_c = rotary_axes(readings.machine.type).second == 'C';
+    for (Eigen::Index i = 0; i < n; ++i) {
+        const Reading& r = readings.readings[static_cast<std::size_t>(i)];
+        const BallCentres c = nominal_balls(readings.machine, r.pose, r.socket_mm);
+        Vec3 u = c.tool - c.table;
+        const double len = u.norm();
+        if (len > 0) u /= len;
+        v.row(i) << r.time_s, r.bar_temp_C.value_or(20.0), r.pose.X_mm, r.pose.Y_mm, r.pose.Z_mm, r.pose.A_rad,
+            second_is_c ? r.pose.C_rad : r.pose.B_rad, u.x(), u.y(), u.z();
+    }
+    return v;
+}
+
+namespace {
+
+/// R² (uncentred: fraction of Σr²) of r against the variable's directional trend.
+double explained_r2(const Eigen::VectorXd& r, const Eigen::MatrixXd& vars, ExplainingVariable v) {
+    const double total = r.squaredNorm();
+    if (total <= 0 || r.size() == 0) return 0;
+    const auto col = static_cast<Eigen::Index>(v);
+    Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d atr = Eigen::Vector4d::Zero();
+    for (Eigen::Index i = 0; i < r.size(); ++i) {
+        double s = 1.0;
+        if (v != ExplainingVariable::bar_direction) s = vars(i, col) - (v == ExplainingVariable::bar_temp ? 20.0 : 0.0);
+        const Eigen::Vector4d a(s, s * vars(i, 7), s * vars(i, 8), s * vars(i, 9));
+        ata.noalias() += a * a.transpose();
+        atr.noalias() += a * r[i];
+    }
+    // Scale to unit diagonal, then a pseudo-inverse: constant or missing variables explain nothing.
+    Eigen::Vector4d d;
+    for (int k = 0; k < 4; ++k) d[k] = ata(k, k) > 0 ? 1.0 / std::sqrt(ata(k, k)) : 0.0;
+    const Eigen::Matrix4d scaled = d.asDiagonal() * ata * d.asDiagonal();
+    const Eigen::Vector4d b = d.asDiagonal() * atr;
+    const Eigen::MatrixXd inv = pinv_psd(scaled, 1e-10);
+    return std::clamp(b.dot(inv * b) / total, 0.0, 1.0);
+}
+
+}  // namespace
+
+ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables) {
+    if (variables.rows() != residual_mm.size())
+        throw AnalysisError("residual analysis: one row of variables per residual is needed");
+    ResidualAnalysis out;
+    out.residual_mm = residual_mm;
+    const Eigen::Index n = residual_mm.size();
+    out.rms_mm = n > 0 ? std::sqrt(residual_mm.squaredNorm() / static_cast<double>(n)) : 0.0;
+    std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
+    double best = -1;
+    for (std::size_t k = 0; k < kExplainingVariableCount; ++k) {
+        const auto v = static_cast<ExplainingVariable>(k);
+        VariableTrend& t = out.trends[k];
+        t.variable = v;
+        t.r2 = explained_r2(residual_mm, variables, v);
+        if (t.r2 > best) {
+            best = t.r2;
+            out.best = v;
+        }
+        if (v == ExplainingVariable::bar_direction || n == 0) continue;
+        const auto col = static_cast<Eigen::Index>(k);
+        std::iota(order.begin(), order.end(), Eigen::Index{0});
+        std::stable_sort(order.begin(), order.end(),
+                         [&](Eigen::Index a, Eigen::Index b) { return variables(a, col) < variables(b, col); });
+        constexpr int kBins = 8;
+        for (int b = 0; b < kBins; ++b) {
+            const std::size_t lo = order.size() * static_cast<std::size_t>(b) / kBins;
+            const std::size_t hi = order.size() * static_cast<std::size_t>(b + 1) / kBins;
+            if (hi <= lo) continue;
+            double sv = 0, sr = 0;
+            for (std::size_t i = lo; i < hi; ++i) {
+                sv += variables(order[i], col);
+                sr += residual_mm[order[i]];
+            }
+            const auto cnt = static_cast<double>(hi - lo);
+            t.bin_centre.push_back(sv / cnt);
+            t.bin_mean_mm.push_back(sr / cnt);
+            t.bin_count.push_back(cnt);
+        }
+    }
+    return out;
+}
+
+// ---- F distribution -------------------------------------------------------------------------------
+
+namespace {
+
+/// Continued fraction of the incomplete beta function (modified Lentz), valid for x < (a+1)/(a+b+2).
+double beta_continued_fraction(double a, double b, double x) {
+    constexpr double kTiny = 1e-300;
+    constexpr double kEps = 1e-15;
+    const double qab = a + b, qap = a + 1.0, qam = a - 1.0;
+    double c = 1.0;
+    double d = 1.0 - qab * x / qap;
+    if (std::abs(d) < kTiny) d = kTiny;
+    d = 1.0 / d;
+    double h = d;
+    for (int m = 1; m <= 10000; ++m) {
+        const double m2 = 2.0 * m;
+        double aa = m * (b - m) * x / ((qam + m2) * (a + m2));
+        d = 1.0 + aa * d;
+        if (std::abs(d) < kTiny) d = kTiny;
+        c = 1.0 + aa / c;
+        if (std::abs(c) < kTiny) c = kTiny;
+        d = 1.0 / d;
+        h *= d * c;
+        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2));
+        d = 1.0 + aa * d;
+        if (std::abs(d) < kTiny) d = kTiny;
+        c = 1.0 + aa / c;
+        if (std::abs(c) < kTiny) c = kTiny;
+        d = 1.0 / d;
+        const double del = d * c;
+        h *= del;
+        if (std::abs(del - 1.0) < kEps) return h;
+    }
+    return h;
+}
+
+}  // namespace
+
+double incomplete_beta(double a, double b, double x) {
+    if (!(a > 0) || !(b > 0) || std::isnan(x)) throw AnalysisError("incomplete beta: a, b > 0 and x in [0, 1]");
+    if (x <= 0) return 0.0;
+    if (x >= 1) return 1.0;
+    const double log_front =
+        std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x);
+    const double front = std::exp(log_front);
+    if (x < (a + 1.0) / (a + b + 2.0)) return front * beta_continued_fraction(a, b, x) / a;
+    return 1.0 - front * beta_continued_fraction(b, a, 1.0 - x) / b;
+}
+
+double f_distribution_sf(double f, double d1, double d2) {
+    if (!(d1 > 0) || !(d2 > 0)) throw AnalysisError("F distribution: degrees of freedom must be positive");
+    if (std::isnan(f)) return 1.0;
+    if (f <= 0) return 1.0;
+    if (std::isinf(f)) return 0.0;
+    // P(F > f) = I_{d2/(d2 + d1 f)}(d2/2, d1/2).
+    return incomplete_beta(d2 / 2.0, d1 / 2.0, d2 / (d2 + d1 * f));
+}
+
+}  // namespace ballbar::analysis
