@@ -137,8 +137,11 @@ void FakeHidDevice::unplug() {
         master_fd_ = -1;
         hid = hid_dir(generation_ - 1, vid_, pid_);
     }
+    // the whole USB device goes: hidraw node, hid device, interface, device
     tb_.remove("/sys" + hid + "/hidraw/hidraw" + std::to_string(generation_ - 1));
     tb_.remove("/sys" + hid);
+    tb_.remove("/sys/devices/pci0000:00/0000:00:14.0/usb1/1-2/1-2:1.0");
+    tb_.remove("/sys/devices/pci0000:00/0000:00:14.0/usb1/1-2");
 }
 
 // Device → host: pack the endpoint's bytes into input reports and push them into the pty.
