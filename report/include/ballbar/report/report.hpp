@@ -1,0 +1,157 @@
+// SPDX-License-Identifier: MIT
+// The content of a session report: everything the PDF shows, as plain data. `build_report` (build.hpp)
+// fills it from the database; `render_pdf` draws it on A4 pages; `to_json` writes the same content as data
+// (docs/report.md describes the schema).
+//
+// Units are in the names: lengths in mm or µm, angles in radians (the report shows degrees and
+// arcseconds), times in seconds since the session started.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ballbar/analysis/types.hpp"
+
+namespace ballbar::report {
+
+using analysis::Vec3;
+
+/// Thrown when a report cannot be produced (unwritable file, inconsistent content).
+class ReportError : public std::runtime_error {
+  public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Smallest, mean and largest value of a quantity over the session; empty when never measured.
+struct Range {
+    std::optional<double> min, mean, max;
+    bool present() const { return mean.has_value(); }
+};
+
+struct Header {
+    std::int64_t session_id = 0;
+    std::string session_name;
+    std::string status;       ///< the session's state at the end (completed, interrupted, …)
+    std::string started_at;   ///< ISO 8601
+    std::string finished_at;  ///< ISO 8601; empty while running or when unknown
+    analysis::MachineGeometry machine;
+    std::string instrument_model, instrument_serial, instrument_calibration_date;
+    std::optional<double> calibrated_length_mm;
+    std::string operator_name;
+    Range bar_temp_C, machine_temp_C, air_temp_C;
+    std::string software_version;
+    std::string notes;
+};
+
+/// One entry of the procedure as it was followed (a state transition of the guided procedure).
+struct ProcedureEvent {
+    double time_s = 0;      ///< since the session started
+    std::string timestamp;  ///< ISO 8601 wall clock; may be empty
+    std::string kind;       ///< "step", "repeat", "pause", "resume", "abort", "finish" or another word
+    std::string step;       ///< the step (state) entered
+    std::string detail;     ///< free text: why repeated, which point, …
+};
+
+/// Total position error ΔV of one SSM location, machine frame.
+struct LocationError {
+    int location = 0;
+    std::string label;                        ///< e.g. "before rotation", "A=90° C=0°"
+    Vec3 position_mm = Vec3::Zero();          ///< where the tool ball was (for the to-scale vector plots)
+    Vec3 error_um = Vec3::Zero();             ///< Δx, Δy, Δz
+    Vec3 uncertainty_um = Vec3::Constant(0);  ///< standard uncertainty of each component (k = 1)
+    int points = 0;                           ///< readings the solution used
+    std::optional<double> residual_rms_um;    ///< of the bar lengths after the solution
+    std::optional<double> condition;          ///< condition number of the layout
+};
+
+/// An orientation error of a rotary axis, from two locations (first-order model and exact inversion).
+struct OrientationError {
+    std::string symbol;                        ///< "Δα", "Δβ", "Δγ"
+    std::string axis;                          ///< "A", "B", "C"
+    std::optional<double> commanded_rad;       ///< the commanded angle of the axis at the measurement
+    std::optional<double> first_order_rad;     ///< the seed's first-order equation (corrected)
+    std::optional<double> exact_rad;           ///< exact nonlinear inversion
+    std::optional<double> uncertainty_rad;     ///< standard uncertainty of the exact value
+    int from_location = -1, to_location = -1;  ///< the two locations it was computed from
+};
+
+/// A time window in which the procedure averaged samples into a point.
+struct CaptureWindow {
+    double start_s = 0, end_s = 0;
+    int location = -1, point = -1;
+    std::optional<double> mean_um;  ///< averaged displacement in the window
+};
+
+/// The bar reading over time, already reduced for plotting (min/max per column, extremes kept;
+/// see decimate.hpp). `samples` is how many raw samples it stands for.
+struct BarTrace {
+    std::vector<double> time_s;
+    std::vector<double> displacement_um;  ///< transducer displacement from the calibrated length
+    std::uint64_t samples = 0;
+    std::optional<double> min_um, max_um;  ///< over every raw sample (not only the kept ones)
+};
+
+/// One parameter of an identified error model.
+struct ModelParameter {
+    std::string name;  ///< ISO symbol or ours ("X0C", "A_zero")
+    std::string unit;  ///< unit of value and uncertainty as shown ("µm", "arcsec", "µm/m", …)
+    double value = 0;
+    std::optional<double> uncertainty;    ///< standard uncertainty, same unit
+    std::optional<double> observability;  ///< 0..1 (1: fully determined by the measured layout)
+    std::string note;                     ///< e.g. "fixed", "poorly observable"
+};
+
+struct IdentifiedModel {
+    std::string name;  ///< e.g. "rotary location errors (TTTRR)"
+    std::vector<ModelParameter> parameters;
+    std::optional<bool> converged;
+    std::optional<int> iterations;
+    std::optional<double> residual_rms_before_um, residual_rms_after_um;
+    std::optional<double> condition;
+};
+
+/// One step of the discovery workflow: the residuals against the variable that explains them, before
+/// and after adding the effect.
+struct DiscoveryStep {
+    std::string effect;                       ///< e.g. "spindle growth"
+    std::string variable;                     ///< the explaining variable, e.g. "session time"
+    std::string variable_unit;                ///< e.g. "min"
+    std::vector<double> x;                    ///< the variable at each reading
+    std::vector<double> before_um, after_um;  ///< residuals at each reading (same length as x)
+    std::optional<double> rms_before_um, rms_after_um;
+    std::optional<bool> accepted;
+    std::string note;
+};
+
+/// Before/after of compensation for one axis (a bar per axis in the figure).
+struct CompensationAxis {
+    std::string axis;  ///< "X", "Y", "Z", "A", "C", …
+    std::string unit;  ///< "µm" or "arcsec"
+    double before = 0, after = 0;
+};
+
+struct Report {
+    Header header;
+    std::vector<ProcedureEvent> procedure;
+    std::vector<LocationError> locations;
+    std::vector<OrientationError> orientation;
+    BarTrace trace;
+    std::vector<CaptureWindow> captures;
+    std::optional<IdentifiedModel> model;
+    std::vector<DiscoveryStep> discovery;
+    std::vector<CompensationAxis> compensation;
+    std::string compensation_metric;  ///< what the bars show, e.g. "max |error| over the check path"
+};
+
+/// The same content as data (schema "ballbar-report/1", docs/report.md).
+nlohmann::json to_json(const Report& report);
+
+/// Renders the report as a vector PDF on A4 pages. Throws ReportError if the file cannot be written.
+/// Returns the number of pages.
+int render_pdf(const Report& report, const std::string& path);
+
+}  // namespace ballbar::report

@@ -1,0 +1,48 @@
+// SPDX-License-Identifier: MIT
+#include "format.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "ballbar/analysis/types.hpp"
+
+namespace ballbar::report {
+
+std::string fixed(double v, int decimals) {
+    if (!std::isfinite(v)) return "n/a";
+    std::string s = fmt::format("{:.{}f}", v, decimals);
+    if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+    return s;
+}
+
+std::string fixed(const std::optional<double>& v, int decimals, const std::string& missing) {
+    return v ? fixed(*v, decimals) : missing;
+}
+
+std::string plus_minus(double v, const std::optional<double>& u, int decimals) {
+    if (!u || !std::isfinite(*u)) return fixed(v, decimals);
+    return fixed(v, decimals) + " ± " + fixed(std::abs(*u), decimals);
+}
+
+std::string degrees(const std::optional<double>& rad) {
+    if (!rad) return "–";
+    return fixed(analysis::rad_to_deg(*rad), kDegDecimals) + "°";
+}
+
+std::string arcseconds(const std::optional<double>& rad) {
+    if (!rad) return "–";
+    return fixed(analysis::rad_to_arcsec(*rad), kArcsecDecimals) + "″";
+}
+
+std::string clock_time(double seconds) {
+    if (!std::isfinite(seconds)) return "n/a";
+    const bool neg = seconds < 0;
+    auto s = static_cast<long long>(std::llround(std::abs(seconds)));
+    const long long h = s / 3600, m = (s / 60) % 60;
+    s %= 60;
+    const std::string t = h > 0 ? fmt::format("{}:{:02}:{:02}", h, m, s) : fmt::format("{}:{:02}", m, s);
+    return neg ? "-" + t : t;
+}
+
+}  // namespace ballbar::report

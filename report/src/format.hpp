@@ -1,0 +1,26 @@
+// SPDX-License-Identifier: MIT
+// How numbers appear in the report (PDF tables and figure notes). Plain ASCII "-" in tables so that a
+// reader searching the text (pdftotext, grep) finds the numbers the JSON holds.
+#pragma once
+
+#include <optional>
+#include <string>
+
+namespace ballbar::report {
+
+inline constexpr int kUmDecimals = 2;      ///< µm
+inline constexpr int kDegDecimals = 5;     ///< degrees
+inline constexpr int kArcsecDecimals = 1;  ///< arcseconds
+
+/// Fixed point; "-0.00" becomes "0.00"; non-finite values become "n/a".
+std::string fixed(double v, int decimals);
+std::string fixed(const std::optional<double>& v, int decimals, const std::string& missing = "–");
+/// "v ± u" (or just "v" without an uncertainty).
+std::string plus_minus(double v, const std::optional<double>& u, int decimals);
+/// An angle given in radians, shown in degrees / arcseconds with the unit sign.
+std::string degrees(const std::optional<double>& rad);
+std::string arcseconds(const std::optional<double>& rad);
+/// A session time: "m:ss" or "h:mm:ss".
+std::string clock_time(double seconds);
+
+}  // namespace ballbar::report

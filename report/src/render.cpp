@@ -1,0 +1,249 @@
+// SPDX-License-Identifier: MIT
+// The report's pages: set-up, results tables, figures, procedure, model, discovery, compensation.
+#include <cairo-pdf.h>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <memory>
+
+#include "ballbar/analysis/types.hpp"
+#include "ballbar/report/report.hpp"
+#include "document.hpp"
+#include "figures.hpp"
+#include "format.hpp"
+
+namespace ballbar::report {
+
+namespace {
+
+std::string vec_mm(const Vec3& v) {
+    return "[" + fixed(v.x(), 3) + ", " + fixed(v.y(), 3) + ", " + fixed(v.z(), 3) + "] mm";
+}
+
+std::string range_C(const Range& r) {
+    if (!r.present()) return "not recorded";
+    std::string s = fixed(*r.mean, 2) + " °C";
+    if (r.min && r.max) s += " (" + fixed(*r.min, 2) + " to " + fixed(*r.max, 2) + ")";
+    return s;
+}
+
+std::string or_dash(const std::string& s) {
+    return s.empty() ? "–" : s;
+}
+
+void setup_section(Document& doc, const Report& r) {
+    const Header& h = r.header;
+    const auto& m = h.machine;
+    std::vector<std::pair<std::string, std::string>> kv{
+        {"Machine", or_dash(m.name)},
+        {"Type", std::string(analysis::to_string(m.type))},
+        {"Tool ball", vec_mm(m.tool_ball_mm)},
+    };
+    if (m.type != analysis::MachineType::RRTTT) kv.emplace_back("A-axis pivot", vec_mm(m.a_pivot_mm));
+    if (m.type == analysis::MachineType::TTTRR) kv.emplace_back("C-frame offset", vec_mm(m.c_offset_mm));
+    kv.emplace_back("Operator", or_dash(h.operator_name));
+    kv.emplace_back("Started", or_dash(h.started_at));
+    kv.emplace_back("Finished", or_dash(h.finished_at));
+    kv.emplace_back("Status", or_dash(h.status));
+    kv.emplace_back("Instrument", or_dash(h.instrument_model));
+    kv.emplace_back("Serial", or_dash(h.instrument_serial));
+    kv.emplace_back("Calibrated", or_dash(h.instrument_calibration_date));
+    kv.emplace_back("Bar length", h.calibrated_length_mm ? fixed(*h.calibrated_length_mm, 4) + " mm" : "–");
+    kv.emplace_back("Bar temperature", range_C(h.bar_temp_C));
+    kv.emplace_back("Machine temp.", range_C(h.machine_temp_C));
+    kv.emplace_back("Air temperature", range_C(h.air_temp_C));
+    kv.emplace_back("Software", "ballbar " + or_dash(h.software_version));
+    doc.heading("Set-up", 60);
+    doc.key_values(kv, 2);
+    if (!h.notes.empty()) doc.paragraph("Notes: " + h.notes);
+}
+
+void results_section(Document& doc, const Report& r) {
+    doc.heading("Total position errors per location", 60);
+    if (r.locations.empty()) {
+        doc.paragraph("No location was solved in this session.");
+    } else {
+        doc.paragraph("ΔV in the machine frame, µm, ± standard uncertainty (k = 1), from the single socket method.", 7,
+                      kGrey);
+        std::vector<std::vector<std::string>> rows;
+        for (const auto& l : r.locations)
+            rows.push_back({std::to_string(l.location), l.label, plus_minus(l.error_um.x(), l.uncertainty_um.x(), 2),
+                            plus_minus(l.error_um.y(), l.uncertainty_um.y(), 2),
+                            plus_minus(l.error_um.z(), l.uncertainty_um.z(), 2), fixed(l.error_um.norm(), 2),
+                            std::to_string(l.points), fixed(l.residual_rms_um, 2)});
+        doc.table({{"Loc.", 0.5},
+                   {"where", 2.5},
+                   {"Δx (µm)", 1.45, HAlign::Right},
+                   {"Δy (µm)", 1.45, HAlign::Right},
+                   {"Δz (µm)", 1.45, HAlign::Right},
+                   {"|ΔV| (µm)", 0.9, HAlign::Right},
+                   {"points", 0.65, HAlign::Right},
+                   {"rms (µm)", 0.8, HAlign::Right}},
+                  rows);
+    }
+
+    doc.heading("Orientation errors", 50);
+    if (r.orientation.empty()) {
+        doc.paragraph("No orientation error was computed in this session.");
+        return;
+    }
+    doc.paragraph(
+        "First-order: the seed's linearised equations (corrected); exact: nonlinear inversion. "
+        "u: standard uncertainty of the exact value.",
+        7, kGrey);
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& o : r.orientation) {
+        const std::string from =
+            o.from_location >= 0 ? "L" + std::to_string(o.from_location) + " → L" + std::to_string(o.to_location) : "–";
+        rows.push_back({o.symbol, o.axis,
+                        o.commanded_rad ? fixed(analysis::rad_to_deg(*o.commanded_rad), 3) + "°" : "–",
+                        degrees(o.first_order_rad), arcseconds(o.first_order_rad), degrees(o.exact_rad),
+                        arcseconds(o.exact_rad), arcseconds(o.uncertainty_rad), from});
+    }
+    doc.table({{"error", 0.6},
+               {"axis", 0.45},
+               {"at", 0.8, HAlign::Right},
+               {"first-order (°)", 1.15, HAlign::Right},
+               {"(arcsec)", 0.85, HAlign::Right},
+               {"exact (°)", 1.15, HAlign::Right},
+               {"(arcsec)", 0.85, HAlign::Right},
+               {"u (arcsec)", 0.8, HAlign::Right},
+               {"from", 0.9}},
+              rows);
+}
+
+void procedure_section(Document& doc, const Report& r) {
+    doc.heading("Procedure as followed", 50);
+    if (r.procedure.empty()) {
+        doc.paragraph("No procedure steps were recorded.");
+        return;
+    }
+    int repeats = 0, pauses = 0;
+    for (const auto& e : r.procedure) {
+        repeats += e.kind == "repeat";
+        pauses += e.kind == "pause";
+    }
+    doc.paragraph(fmt::format("{} events; {} repeated, {} paused.", r.procedure.size(), repeats, pauses), 7, kGrey);
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& e : r.procedure) rows.push_back({clock_time(e.time_s), e.timestamp, e.kind, e.step, e.detail});
+    doc.table({{"time", 0.6, HAlign::Right}, {"timestamp", 1.6}, {"event", 0.7}, {"step", 1.4}, {"detail", 3.0}}, rows);
+}
+
+void model_section(Document& doc, const IdentifiedModel& m) {
+    doc.heading("Identified model" + (m.name.empty() ? std::string() : ": " + m.name), 60);
+    std::string summary;
+    if (m.converged) summary += *m.converged ? "converged" : "did NOT converge";
+    if (m.iterations) summary += fmt::format(" after {} iterations", *m.iterations);
+    if (m.residual_rms_before_um || m.residual_rms_after_um)
+        summary += "; residual rms " + fixed(m.residual_rms_before_um, kUmDecimals) + " → " +
+                   fixed(m.residual_rms_after_um, kUmDecimals) + " µm";
+    if (m.condition) summary += "; condition " + fixed(*m.condition, 1);
+    if (!summary.empty()) doc.paragraph(summary, 7.5);
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& p : m.parameters)
+        rows.push_back({p.name, fixed(p.value, 3), fixed(p.uncertainty, 3), p.unit, fixed(p.observability, 2), p.note});
+    doc.table({{"parameter", 1.0},
+               {"value", 1.0, HAlign::Right},
+               {"± u", 0.9, HAlign::Right},
+               {"unit", 0.7},
+               {"observability", 0.9, HAlign::Right},
+               {"note", 2.2}},
+              rows);
+}
+
+void discovery_section(Document& doc, const Report& r) {
+    doc.heading("Discovery steps", 200);
+    std::vector<std::vector<std::string>> rows;
+    for (std::size_t i = 0; i < r.discovery.size(); ++i) {
+        const auto& s = r.discovery[i];
+        rows.push_back({std::to_string(i + 1), s.effect,
+                        s.variable + (s.variable_unit.empty() ? "" : " (" + s.variable_unit + ")"),
+                        fixed(s.rms_before_um, kUmDecimals), fixed(s.rms_after_um, kUmDecimals),
+                        s.accepted ? (*s.accepted ? "yes" : "no") : "–", s.note});
+    }
+    doc.table({{"#", 0.3},
+               {"effect", 1.4},
+               {"explaining variable", 1.4},
+               {"rms before (µm)", 1.15, HAlign::Right},
+               {"rms after (µm)", 1.15, HAlign::Right},
+               {"kept", 0.5},
+               {"note", 1.6}},
+              rows);
+    figure_discovery(doc, r.discovery);
+}
+
+void compensation_section(Document& doc, const Report& r) {
+    doc.heading("Compensation", 180);
+    if (!r.compensation_metric.empty()) doc.paragraph("Bars: " + r.compensation_metric + ".", 7, kGrey);
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& c : r.compensation) {
+        const double gain = c.after != 0 ? c.before / c.after : std::nan("");
+        rows.push_back(
+            {c.axis, fixed(c.before, 2), fixed(c.after, 2), c.unit, std::isfinite(gain) ? fixed(gain, 1) + "×" : "–"});
+    }
+    doc.table({{"axis", 0.6},
+               {"before", 1.0, HAlign::Right},
+               {"after", 1.0, HAlign::Right},
+               {"unit", 0.7},
+               {"improvement", 1.0, HAlign::Right}},
+              rows);
+    figure_compensation(doc, r);
+}
+
+int layout(cairo_surface_t* surface, const Report& r, int total_pages) {
+    const Header& h = r.header;
+    Document doc(surface,
+                 (h.machine.name.empty() ? std::string("machine") : h.machine.name) + " · session " +
+                     std::to_string(h.session_id) + (h.session_name.empty() ? "" : " (" + h.session_name + ")"),
+                 total_pages);
+    doc.title(
+        "Ball-bar session report",
+        (h.session_name.empty() ? "Session " + std::to_string(h.session_id) : h.session_name) + " · " +
+            (h.machine.name.empty() ? std::string(analysis::to_string(h.machine.type))
+                                    : h.machine.name + " (" + std::string(analysis::to_string(h.machine.type)) + ")") +
+            (h.started_at.empty() ? "" : " · " + h.started_at));
+    setup_section(doc, r);
+    results_section(doc, r);
+    doc.heading("Figures", 200);
+    figure_trace(doc, r);
+    figure_vectors(doc, r);
+    figure_orientation(doc, r);
+    procedure_section(doc, r);
+    if (r.model) model_section(doc, *r.model);
+    if (!r.discovery.empty()) discovery_section(doc, r);
+    if (!r.compensation.empty()) compensation_section(doc, r);
+    return doc.finish();
+}
+
+using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+
+cairo_status_t discard(void*, const unsigned char*, unsigned int) {
+    return CAIRO_STATUS_SUCCESS;
+}
+
+}  // namespace
+
+int render_pdf(const Report& report, const std::string& path) {
+    // First pass into nowhere to count the pages for the footers, second pass into the file.
+    SurfacePtr counting(cairo_pdf_surface_create_for_stream(discard, nullptr, Document::kWidth, Document::kHeight),
+                        cairo_surface_destroy);
+    const int pages = layout(counting.get(), report, 0);
+    cairo_surface_finish(counting.get());
+
+    SurfacePtr surface(cairo_pdf_surface_create(path.c_str(), Document::kWidth, Document::kHeight),
+                       cairo_surface_destroy);
+    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
+        throw ReportError("cannot write " + path + ": " + cairo_status_to_string(cairo_surface_status(surface.get())));
+    cairo_pdf_surface_set_metadata(
+        surface.get(), CAIRO_PDF_METADATA_TITLE,
+        ("Ball-bar session report, session " + std::to_string(report.header.session_id)).c_str());
+    cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATOR,
+                                   ("ballbar " + report.header.software_version).c_str());
+    const int written = layout(surface.get(), report, pages);
+    cairo_surface_finish(surface.get());
+    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
+        throw ReportError("cannot write " + path + ": " + cairo_status_to_string(cairo_surface_status(surface.get())));
+    return written;
+}
+
+}  // namespace ballbar::report
