@@ -3,6 +3,7 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <limits>
 
 #include "ballbar/analysis/kinematics.hpp"
 
@@ -217,6 +218,7 @@ OrientationSolution solve_orientation(const TtttrrInput& in) {
     Vec3 res = Vec3::Zero();
     bool converged = false;
     int it = 0;
+    double prev_step = std::numeric_limits<double>::infinity();
     for (; it < 30 && !converged; ++it) {
         const double cc = std::cos(c), sc = std::sin(c), cA = std::cos(a), sA = std::sin(a);
         const Vec3 wv(xr * cc - yr * sc, xr * sc + yr * cc, zz);  // [0,0,z_αγ] + Rz(γ')·p
@@ -232,7 +234,10 @@ OrientationSolution solve_orientation(const TtttrrInput& in) {
         if (!step.allFinite()) break;
         a -= step.x();
         c -= step.y();
-        converged = step.norm() <= 1e-15;
+        // Done at the rounding floor: a tiny step, or a small one that no longer shrinks.
+        const double sn = step.norm();
+        converged = sn <= 1e-15 || (sn <= 1e-11 && sn > 0.25 * prev_step);
+        prev_step = sn;
     }
     if (!converged) {
         add_reason(out.singular, "exact", "the Gauss–Newton fit of (α', γ') did not converge");
