@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: MIT
+// A simulated five-axis machine with a ball-bar between its tool ball and a table socket: the true
+// world the emulator measures. It uses analysis' actual kinematics with a known set of error
+// parameters, so tests, the acquisition engineer and the identification demo can compare what they
+// estimate with the truth (`true_errors()`, `true_distance_mm()`, `bar_reading_mm()`).
+//
+// Motion is a queue of straight moves in axis space (G0/G1), dwells (G4) and NC programs, timed on the
+// simulated clock the caller passes in (seconds since the emulator's power-on). Thread-safe: the
+// emulator samples it while another thread queues motion.
+#pragma once
+
+#include <deque>
+#include <mutex>
+#include <string_view>
+
+#include "ballbar/analysis/error_params.hpp"
+#include "ballbar/analysis/kinematics.hpp"
+#include "ballbar/analysis/nc_program.hpp"
+#include "ballbar/analysis/types.hpp"
+
+namespace ballbar::device {
+
+struct MachineSetup {
+    analysis::MachineGeometry geometry;
+    analysis::ErrorParams errors;                              ///< the truth
+    analysis::Vec3 socket_mm = analysis::Vec3(100, 0, 0);      ///< nominal socket, table frame
+    analysis::Vec3 socket_offset_mm = analysis::Vec3::Zero();  ///< set-up error of the socket
+    analysis::Pose start{100, 0, 150, 0, 0, 0};                ///< pose at power-on
+    double rapid_mm_min = 10000;                               ///< G0 speed of the linear axes
+    double rapid_deg_min = 5400;                               ///< G0 speed of the rotary axes
+};
+
+class SimulatedMachine {
+  public:
+    explicit SimulatedMachine(MachineSetup setup);
+
+    const MachineSetup& setup() const { return setup_; }
+    const analysis::ErrorParams& true_errors() const { return setup_.errors; }
+    analysis::Vec3 actual_socket_mm() const { return setup_.socket_mm + setup_.socket_offset_mm; }
+
+    /// G1: straight move in axis space at `feed_mm_min` (rotary axes read it as deg/min; a mixed move
+    /// takes the longer of the two). Starts when the queue ahead of it is done.
+    void move_to(const analysis::Pose& target, double feed_mm_min);
+    /// G0 at the rapid speeds.
+    void rapid_to(const analysis::Pose& target);
+    /// G4.
+    void dwell(double seconds);
+    /// Queues every motion block of a program (modal axes carried from the end of the queue).
+    void run_program(const analysis::NcProgram& program);
+    void run_nc(std::string_view text, analysis::NcDialect dialect);
+    /// Drops the queued motion; the machine stops where it is at `t_s`.
+    void stop(double t_s);
+
+    /// Commanded pose at time `t_s` (must not go backwards between calls).
+    analysis::Pose pose_at(double t_s);
+    /// The time the motion queued so far ends (≤ now when idle).
+    double motion_end_s() const;
+    bool idle_at(double t_s) const;
+
+    /// |b − s| of the actual machine at `t_s` (spindle growth uses session time t_s).
+    double true_distance_mm(double t_s);
+    /// What a perfect transducer on this bar reads: the distance plus the bar's own errors
+    /// (length calibration error, thermal expansion at `bar_temp_C`).
+    double bar_reading_mm(double t_s, double bar_temp_C);
+
+  private:
+    struct Segment {
+        analysis::Pose from, to;
+        double t0 = 0, t1 = 0;
+    };
+    void enqueue(const analysis::Pose& target, double duration_s);
+    analysis::Pose pose_locked(double t_s);
+
+    MachineSetup setup_;
+    mutable std::mutex mutex_;
+    std::deque<Segment> queue_;
+    analysis::Pose last_pose_;  ///< where the queue ends (or the machine stands)
+    analysis::Pose current_;    ///< pose at now_
+    double now_s_ = 0;
+    double queue_end_s_ = 0;
+};
+
+}  // namespace ballbar::device

@@ -1,0 +1,144 @@
+// SPDX-License-Identifier: MIT
+#include "ballbar/device/sim_machine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ballbar::device {
+
+using analysis::Pose;
+
+namespace {
+
+Pose lerp(const Pose& a, const Pose& b, double u) {
+    auto mix = [u](double x, double y) { return x + (y - x) * u; };
+    return {mix(a.X_mm, b.X_mm),   mix(a.Y_mm, b.Y_mm),   mix(a.Z_mm, b.Z_mm),
+            mix(a.A_rad, b.A_rad), mix(a.B_rad, b.B_rad), mix(a.C_rad, b.C_rad)};
+}
+
+double linear_dist_mm(const Pose& a, const Pose& b) {
+    return (b.linear_mm() - a.linear_mm()).norm();
+}
+
+double rotary_dist_deg(const Pose& a, const Pose& b) {
+    const double da = b.A_rad - a.A_rad, db = b.B_rad - a.B_rad, dc = b.C_rad - a.C_rad;
+    return analysis::rad_to_deg(std::sqrt(da * da + db * db + dc * dc));
+}
+
+}  // namespace
+
+SimulatedMachine::SimulatedMachine(MachineSetup setup)
+    : setup_(std::move(setup)), last_pose_(setup_.start), current_(setup_.start) {
+    if (!(setup_.rapid_mm_min > 0) || !(setup_.rapid_deg_min > 0)) {
+        throw std::invalid_argument("machine rapid speeds must be positive");
+    }
+}
+
+void SimulatedMachine::enqueue(const Pose& target, double duration_s) {
+    const double t0 = std::max(queue_end_s_, now_s_);
+    queue_.push_back({last_pose_, target, t0, t0 + std::max(duration_s, 0.0)});
+    queue_end_s_ = t0 + std::max(duration_s, 0.0);
+    last_pose_ = target;
+}
+
+void SimulatedMachine::move_to(const Pose& target, double feed_mm_min) {
+    if (!(feed_mm_min > 0)) throw std::invalid_argument("feed must be positive (G1 needs F)");
+    std::lock_guard lock(mutex_);
+    const double minutes =
+        std::max(linear_dist_mm(last_pose_, target), rotary_dist_deg(last_pose_, target)) / feed_mm_min;
+    enqueue(target, minutes * 60.0);
+}
+
+void SimulatedMachine::rapid_to(const Pose& target) {
+    std::lock_guard lock(mutex_);
+    const double minutes = std::max(linear_dist_mm(last_pose_, target) / setup_.rapid_mm_min,
+                                    rotary_dist_deg(last_pose_, target) / setup_.rapid_deg_min);
+    enqueue(target, minutes * 60.0);
+}
+
+void SimulatedMachine::dwell(double seconds) {
+    if (!(seconds >= 0)) throw std::invalid_argument("dwell must not be negative");
+    std::lock_guard lock(mutex_);
+    enqueue(last_pose_, seconds);
+}
+
+void SimulatedMachine::run_program(const analysis::NcProgram& program) {
+    Pose start;
+    {
+        std::lock_guard lock(mutex_);
+        start = last_pose_;
+    }
+    const auto poses = analysis::resolve_poses(program, start);
+    double feed = 0;
+    for (std::size_t i = 0; i < program.blocks.size(); ++i) {
+        const auto& block = program.blocks[i];
+        if (block.feed_mm_min) feed = *block.feed_mm_min;
+        switch (block.motion) {
+            case analysis::NcMotion::Rapid:
+                rapid_to(poses[i]);
+                break;
+            case analysis::NcMotion::Feed:
+                if (!(feed > 0)) throw analysis::NcError(block.line, "G1 without a feed rate (F)");
+                move_to(poses[i], feed);
+                break;
+            case analysis::NcMotion::Dwell:
+                dwell(block.dwell_s);
+                break;
+            case analysis::NcMotion::None:
+                break;
+        }
+    }
+}
+
+void SimulatedMachine::run_nc(std::string_view text, analysis::NcDialect dialect) {
+    run_program(analysis::parse_nc_program(text, dialect));
+}
+
+void SimulatedMachine::stop(double t_s) {
+    std::lock_guard lock(mutex_);
+    const Pose here = pose_locked(t_s);
+    queue_.clear();
+    last_pose_ = here;
+    queue_end_s_ = now_s_;
+}
+
+Pose SimulatedMachine::pose_locked(double t_s) {
+    now_s_ = std::max(now_s_, t_s);
+    while (!queue_.empty() && queue_.front().t1 <= now_s_) {
+        current_ = queue_.front().to;
+        queue_.pop_front();
+    }
+    if (!queue_.empty() && queue_.front().t0 < now_s_) {
+        const auto& s = queue_.front();
+        current_ = lerp(s.from, s.to, (now_s_ - s.t0) / (s.t1 - s.t0));
+    }
+    return current_;
+}
+
+Pose SimulatedMachine::pose_at(double t_s) {
+    std::lock_guard lock(mutex_);
+    return pose_locked(t_s);
+}
+
+double SimulatedMachine::motion_end_s() const {
+    std::lock_guard lock(mutex_);
+    return queue_end_s_;
+}
+
+bool SimulatedMachine::idle_at(double t_s) const {
+    return motion_end_s() <= t_s;
+}
+
+double SimulatedMachine::true_distance_mm(double t_s) {
+    const Pose pose = pose_at(t_s);
+    const auto balls = analysis::actual_balls(setup_.geometry, setup_.errors, pose, actual_socket_mm(), {t_s, 20.0});
+    return (balls.tool - balls.table).norm();
+}
+
+double SimulatedMachine::bar_reading_mm(double t_s, double bar_temp_C) {
+    const Pose pose = pose_at(t_s);
+    return analysis::predicted_reading(setup_.geometry, setup_.errors, pose, actual_socket_mm(), {t_s, bar_temp_C});
+}
+
+}  // namespace ballbar::device
