@@ -1,0 +1,368 @@
+// SPDX-License-Identifier: MIT
+#include "ballbar/analysis/identify.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <unsupported/Eigen/AutoDiff>
+
+#include "ballbar/analysis/kinematics.hpp"
+
+namespace ballbar::analysis {
+namespace {
+
+// Derivatives of one reading: every free parameter plus the 3 offsets of that reading's socket.
+constexpr int kMaxDer = static_cast<int>(kParamCount) + 3;
+using Der = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxDer, 1>;
+using AD = Eigen::AutoDiffScalar<Der>;
+
+constexpr double kSocketMatchMm = 1e-6;
+
+const char* const kAxisNames[3] = {"x", "y", "z"};
+
+}  // namespace
+
+std::string FitOptions::validate() const {
+    std::vector<bool> seen(kParamCount, false);
+    for (Param p : free_params) {
+        const auto i = static_cast<std::size_t>(p);
+        if (i >= kParamCount) return "free parameter out of range";
+        if (seen[i]) return "parameter " + std::string(param_info(p).name) + " listed twice";
+        seen[i] = true;
+    }
+    if (max_iterations < 1) return "max_iterations must be at least 1";
+    if (!(min_independence > 0 && min_independence < 1)) return "min_independence must be in (0, 1)";
+    if (!(min_sensitivity >= 0)) return "min_sensitivity must be >= 0";
+    if (!(step_tolerance > 0)) return "step_tolerance must be > 0";
+    return {};
+}
+
+std::vector<std::string> FitSummary::unobservable() const {
+    std::vector<std::string> out;
+    for (const auto& e : estimates)
+        if (!e.observable) out.push_back(e.name);
+    return out;
+}
+
+const ParamEstimate* FitSummary::find(std::string_view name) const {
+    for (const auto& e : estimates)
+        if (e.name == name) return &e;
+    return nullptr;
+}
+
+std::string FitSummary::brief_report() const {
+    std::ostringstream os;
+    os << (converged ? "converged" : "NOT converged") << " after " << iterations << " iterations (" << message << "); "
+       << readings << " readings, residual RMS " << residual_rms_mm * 1000.0 << " um (start " << initial_rms_mm * 1000.0
+       << " um)\n";
+    for (const auto& e : estimates) {
+        os << "  " << e.name << ": ";
+        if (e.observable)
+            os << e.estimate << " +- " << e.std << " (independence " << e.independence << ")\n";
+        else
+            os << "unobservable (independence " << e.independence << "), held at " << e.estimate << "\n";
+    }
+    return os.str();
+}
+
+std::vector<SocketPosition> socket_positions(const ReadingSet& readings, std::vector<int>* reading_socket) {
+    std::vector<SocketPosition> out;
+    if (reading_socket) reading_socket->assign(readings.readings.size(), -1);
+    for (std::size_t i = 0; i < readings.readings.size(); ++i) {
+        const Vec3& s = readings.readings[i].socket_mm;
+        int found = -1;
+        for (std::size_t k = 0; k < out.size(); ++k)
+            if ((out[k].nominal_mm - s).cwiseAbs().maxCoeff() <= kSocketMatchMm) {
+                found = static_cast<int>(k);
+                break;
+            }
+        if (found < 0) {
+            out.push_back({s, Vec3::Zero(), 0});
+            found = static_cast<int>(out.size() - 1);
+        }
+        ++out[static_cast<std::size_t>(found)].readings;
+        if (reading_socket) (*reading_socket)[i] = found;
+    }
+    return out;
+}
+
+ReadingSet merge_readings(std::span<const ReadingSet> sets) {
+    if (sets.empty()) throw AnalysisError("no readings to merge");
+    ReadingSet out;
+    out.machine = sets.front().machine;
+    for (const auto& s : sets) {
+        if (s.machine.type != out.machine.type)
+            throw AnalysisError("cannot merge readings of a " + std::string(to_string(s.machine.type)) +
+                                " machine with readings of a " + std::string(to_string(out.machine.type)) + " machine");
+        out.readings.insert(out.readings.end(), s.readings.begin(), s.readings.end());
+    }
+    return out;
+}
+
+ReadingConditions conditions_of(const Reading& r) {
+    return {r.time_s, r.bar_temp_C.value_or(20.0)};
+}
+
+Eigen::VectorXd reading_residuals(const ReadingSet& readings, const ErrorParams& e,
+                                  std::span<const Vec3> socket_offsets_mm) {
+    std::vector<int> which;
+    const auto sockets = socket_positions(readings, &which);
+    if (!socket_offsets_mm.empty() && socket_offsets_mm.size() != sockets.size())
+        throw AnalysisError("socket offsets: " + std::to_string(socket_offsets_mm.size()) + " given, readings use " +
+                            std::to_string(sockets.size()) + " socket positions");
+    Eigen::VectorXd r(static_cast<Eigen::Index>(readings.readings.size()));
+    for (std::size_t i = 0; i < readings.readings.size(); ++i) {
+        const Reading& rd = readings.readings[i];
+        Vec3 socket = rd.socket_mm;
+        if (!socket_offsets_mm.empty()) socket += socket_offsets_mm[static_cast<std::size_t>(which[i])];
+        r[static_cast<Eigen::Index>(i)] =
+            rd.measured_mm - predicted_reading(readings.machine, e, rd.pose, socket, conditions_of(rd));
+    }
+    return r;
+}
+
+Eigen::MatrixXd reading_jacobian(const ReadingSet& readings, const ErrorParams& e, std::span<const Param> free,
+                                 std::span<const Vec3> socket_offsets_mm, bool with_socket_offsets) {
+    std::vector<int> which;
+    const auto sockets = socket_positions(readings, &which);
+    if (!socket_offsets_mm.empty() && socket_offsets_mm.size() != sockets.size())
+        throw AnalysisError("socket offsets do not match the readings' socket positions");
+    const int np = static_cast<int>(free.size());
+    const int nd = np + 3;
+    if (nd > kMaxDer) throw AnalysisError("too many free parameters");
+    const auto ns = static_cast<Eigen::Index>(with_socket_offsets ? 3 * sockets.size() : 0);
+
+    // The parameters as AutoDiff scalars, built once: constants for fixed ones, unit seeds for free.
+    ErrorParamsT<AD> ead;
+    for (std::size_t k = 0; k < kParamCount; ++k) ead.values[k] = AD(e.values[k], Der::Zero(nd));
+    for (int j = 0; j < np; ++j) ead[free[static_cast<std::size_t>(j)]].derivatives()[j] = 1.0;
+
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(readings.readings.size()), np + ns);
+    for (std::size_t i = 0; i < readings.readings.size(); ++i) {
+        const Reading& rd = readings.readings[i];
+        const auto k = static_cast<std::size_t>(which[i]);
+        Vec3 s = rd.socket_mm;
+        if (!socket_offsets_mm.empty()) s += socket_offsets_mm[k];
+        Vec3T<AD> sad;
+        for (int a = 0; a < 3; ++a) {
+            sad[a] = AD(s[a], Der::Zero(nd));
+            sad[a].derivatives()[np + a] = 1.0;
+        }
+        const AD value = predicted_reading<AD>(readings.machine, ead, rd.pose, sad, conditions_of(rd));
+        const auto row = static_cast<Eigen::Index>(i);
+        const Der& d = value.derivatives();
+        if (d.size() == 0) continue;  // no dependence at all (cannot happen with seeded sockets)
+        for (int j = 0; j < np; ++j) jac(row, j) = d[j];
+        if (with_socket_offsets)
+            for (int a = 0; a < 3; ++a) jac(row, np + 3 * static_cast<Eigen::Index>(k) + a) = d[np + a];
+    }
+    return jac;
+}
+
+namespace {
+
+// Column list in priority order (sockets, then parameters in the caller's order), then the greedy test.
+std::vector<int> accept_columns(const Eigen::MatrixXd& jac, int np, const FitOptions& opt,
+                                std::vector<ParamEstimate>& est) {
+    const Eigen::Index n = jac.cols();
+    const double rows = static_cast<double>(std::max<Eigen::Index>(jac.rows(), 1));
+    const Eigen::VectorXd norms = jac.colwise().norm().transpose();
+    std::vector<int> order;
+    for (Eigen::Index c = np; c < n; ++c) order.push_back(static_cast<int>(c));
+    for (int c = 0; c < np; ++c) order.push_back(c);
+
+    Eigen::MatrixXd scaled = jac;
+    for (Eigen::Index c = 0; c < n; ++c) {
+        est[static_cast<std::size_t>(c)].sensitivity = norms[c] / std::sqrt(rows);
+        if (est[static_cast<std::size_t>(c)].sensitivity > opt.min_sensitivity)
+            scaled.col(c) /= norms[c];
+        else
+            scaled.col(c).setZero();
+    }
+    std::vector<int> accepted;
+    const Eigen::VectorXd indep =
+        sequential_independence(scaled.transpose() * scaled, order, opt.min_independence, accepted);
+    for (Eigen::Index c = 0; c < n; ++c) est[static_cast<std::size_t>(c)].independence = indep[c];
+    std::sort(accepted.begin(), accepted.end());
+    return accepted;
+}
+
+}  // namespace
+
+Eigen::VectorXd sequential_independence(const Eigen::MatrixXd& unit_gram, std::span<const int> order,
+                                        double min_independence, std::vector<int>& accepted) {
+    const Eigen::Index n = unit_gram.cols();
+    Eigen::VectorXd indep = Eigen::VectorXd::Zero(n);
+    Eigen::MatrixXd chol = Eigen::MatrixXd::Zero(n, n);  // Cholesky factor of the accepted columns' Gram
+    Eigen::Index m = 0;
+    std::vector<int> mine;
+    for (int c : order) {
+        if (!(unit_gram(c, c) > 0.5)) continue;  // a zero column: no effect at all
+        Eigen::VectorXd y(m);
+        for (Eigen::Index a = 0; a < m; ++a) y[a] = unit_gram(mine[static_cast<std::size_t>(a)], c);
+        if (m > 0) chol.topLeftCorner(m, m).triangularView<Eigen::Lower>().solveInPlace(y);
+        const double d = 1.0 - y.squaredNorm();
+        indep[c] = std::sqrt(std::max(d, 0.0));
+        if (indep[c] < min_independence) continue;
+        chol.block(m, 0, 1, m) = y.transpose();
+        chol(m, m) = std::sqrt(d);
+        mine.push_back(c);
+        ++m;
+    }
+    accepted.insert(accepted.end(), mine.begin(), mine.end());
+    return indep;
+}
+
+FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
+    if (const std::string why = opt.validate(); !why.empty()) throw AnalysisError("fit options: " + why);
+    FitSummary out;
+    std::vector<int> which;
+    out.sockets = socket_positions(readings, &which);
+    out.readings = readings.readings.size();
+    const int np = static_cast<int>(opt.free_params.size());
+    const std::size_t ns = opt.fit_socket_offsets ? out.sockets.size() : 0;
+
+    for (Param p : opt.free_params) {
+        ParamEstimate pe;
+        pe.name = std::string(param_info(p).name);
+        pe.param = p;
+        pe.estimate = opt.fixed[p];
+        out.estimates.push_back(pe);
+    }
+    for (std::size_t k = 0; k < ns; ++k)
+        for (int a = 0; a < 3; ++a) {
+            ParamEstimate pe;
+            pe.name = "socket" + std::to_string(k) + "." + kAxisNames[a];
+            pe.socket = static_cast<int>(k);
+            pe.axis = a;
+            out.estimates.push_back(pe);
+        }
+    const std::size_t unknowns = out.estimates.size();
+    if (out.readings <= unknowns)
+        throw AnalysisError("identification needs more readings than unknowns: " + std::to_string(out.readings) +
+                            " readings for " + std::to_string(unknowns) + " unknowns (" + std::to_string(np) +
+                            " parameters + " + std::to_string(3 * ns) + " socket offsets)");
+
+    ErrorParams e = opt.fixed;
+    std::vector<Vec3> offsets(out.sockets.size(), Vec3::Zero());
+    auto measured_minus_predicted = [&](const ErrorParams& ee, const std::vector<Vec3>& off) {
+        return reading_residuals(readings, ee, off);
+    };
+    Eigen::VectorXd r = measured_minus_predicted(e, offsets);
+    double cost = r.squaredNorm();
+    out.initial_rms_mm = std::sqrt(cost / static_cast<double>(out.readings));
+
+    Eigen::MatrixXd jac_full = reading_jacobian(readings, e, opt.free_params, offsets, opt.fit_socket_offsets);
+    const std::vector<int> cols = accept_columns(jac_full, np, opt, out.estimates);
+    out.fitted.assign(cols.begin(), cols.end());
+    const auto m = static_cast<Eigen::Index>(cols.size());
+
+    auto apply_step = [&](const Eigen::VectorXd& delta, ErrorParams& ee, std::vector<Vec3>& off) {
+        for (Eigen::Index j = 0; j < m; ++j) {
+            const auto c = static_cast<std::size_t>(cols[static_cast<std::size_t>(j)]);
+            const auto& pe = out.estimates[c];
+            if (pe.param)
+                ee[*pe.param] += delta[j];
+            else
+                off[static_cast<std::size_t>(pe.socket)][pe.axis] += delta[j];
+        }
+    };
+    auto select = [&](const Eigen::MatrixXd& full) {
+        Eigen::MatrixXd j(full.rows(), m);
+        for (Eigen::Index k = 0; k < m; ++k) j.col(k) = full.col(cols[static_cast<std::size_t>(k)]);
+        return j;
+    };
+
+    Eigen::MatrixXd jac = select(jac_full);
+    double lambda = 1e-6;
+    out.message = "iteration limit reached";
+    for (out.iterations = 1; out.iterations <= opt.max_iterations && m > 0; ++out.iterations) {
+        Eigen::VectorXd scale = jac.colwise().norm().transpose();
+        for (Eigen::Index k = 0; k < m; ++k)
+            if (!(scale[k] > 0)) scale[k] = 1;
+        const Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
+        const Eigen::MatrixXd a = js.transpose() * js;
+        const Eigen::VectorXd g = js.transpose() * r;
+        bool accepted = false;
+        double step_norm = 0;
+        double new_cost = cost;
+        for (int tries = 0; tries < 12 && !accepted; ++tries) {
+            Eigen::MatrixXd damped = a;
+            damped.diagonal().array() *= 1.0 + lambda;
+            const Eigen::VectorXd ds = damped.ldlt().solve(g);
+            const Eigen::VectorXd delta = ds.cwiseQuotient(scale);
+            ErrorParams e_try = e;
+            std::vector<Vec3> off_try = offsets;
+            apply_step(delta, e_try, off_try);
+            const Eigen::VectorXd r_try = measured_minus_predicted(e_try, off_try);
+            new_cost = r_try.squaredNorm();
+            if (std::isfinite(new_cost) && new_cost <= cost) {
+                accepted = true;
+                e = e_try;
+                offsets = off_try;
+                r = r_try;
+                step_norm = ds.norm();
+                lambda = std::max(lambda * 0.1, 1e-12);
+            } else {
+                lambda *= 10.0;
+            }
+        }
+        if (!accepted) {
+            // No decrease possible: at the minimum to working precision.
+            out.converged = true;
+            out.message = "no further decrease of the residual";
+            break;
+        }
+        const double old_cost = cost;
+        cost = new_cost;
+        // Converged when the step moved the predictions by a negligible amount against the residual.
+        const double noise = std::sqrt(cost / static_cast<double>(out.readings));
+        if (step_norm <= opt.step_tolerance * (std::sqrt(cost) + 1e-12) || old_cost - cost <= 1e-14 * old_cost ||
+            noise < 1e-13) {
+            out.converged = true;
+            out.message = "step below tolerance";
+            jac = select(reading_jacobian(readings, e, opt.free_params, offsets, opt.fit_socket_offsets));
+            ++out.iterations;
+            break;
+        }
+        jac = select(reading_jacobian(readings, e, opt.free_params, offsets, opt.fit_socket_offsets));
+    }
+    if (m == 0) {
+        out.converged = true;
+        out.message = "nothing observable to fit";
+        out.iterations = 0;
+    }
+    out.iterations = std::min(out.iterations, opt.max_iterations);
+
+    // Uncertainties from the residual variance and the (scaled) normal matrix at the solution.
+    out.degrees_of_freedom = out.readings - static_cast<std::size_t>(m);
+    out.residual_rms_mm = std::sqrt(cost / static_cast<double>(out.readings));
+    const double sigma2 = cost / static_cast<double>(out.degrees_of_freedom);
+    out.residual_sigma_mm = std::sqrt(sigma2);
+    out.correlation = Eigen::MatrixXd::Identity(m, m);
+    if (m > 0) {
+        Eigen::VectorXd scale = jac.colwise().norm().transpose();
+        const Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
+        const Eigen::MatrixXd a = js.transpose() * js;
+        const Eigen::MatrixXd ainv = a.ldlt().solve(Eigen::MatrixXd::Identity(m, m));
+        for (Eigen::Index j = 0; j < m; ++j) {
+            auto& pe = out.estimates[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
+            pe.observable = true;
+            pe.std = std::sqrt(sigma2 * ainv(j, j)) / scale[j];
+            pe.independence = 1.0 / std::sqrt(ainv(j, j));
+            for (Eigen::Index k = 0; k < m; ++k)
+                out.correlation(j, k) = ainv(j, k) / std::sqrt(ainv(j, j) * ainv(k, k));
+        }
+    }
+    for (auto& pe : out.estimates) {
+        if (pe.param)
+            pe.estimate = pe.observable ? e[*pe.param] : opt.fixed[*pe.param];
+        else
+            pe.estimate = offsets[static_cast<std::size_t>(pe.socket)][pe.axis];
+    }
+    out.model = e;
+    for (std::size_t k = 0; k < out.sockets.size(); ++k) out.sockets[k].offset_mm = offsets[k];
+    return out;
+}
+
+}  // namespace ballbar::analysis
