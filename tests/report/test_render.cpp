@@ -1,0 +1,147 @@
+// SPDX-License-Identifier: MIT
+// Renders reports of the three machine types and reads them back with poppler: A4 pages, page count,
+// and the key figures (the same numbers the JSON holds) in the extracted text.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "ballbar/report/report.hpp"
+#include "poppler.hpp"
+#include "synthetic.hpp"
+
+namespace ballbar::report {
+namespace {
+
+using testing::pdf_page_size;
+using testing::pdf_pages;
+using testing::pdf_text;
+using testing::TempDir;
+
+std::string fmt2(double v, int decimals) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+    std::string s(buf);
+    if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+    return s;
+}
+
+class RenderByType : public ::testing::TestWithParam<analysis::MachineType> {};
+
+TEST_P(RenderByType, PdfHoldsTheKeyFiguresOfTheJson) {
+    const auto type = GetParam();
+    const Report r = testing::synthetic_report(type, 50000, 11);
+    TempDir dir;
+    const auto pdf = dir.path / "report.pdf";
+    const int pages = render_pdf(r, pdf.string());
+    EXPECT_GE(pages, 2);
+    EXPECT_EQ(pdf_pages(pdf), pages);
+    EXPECT_NE(pdf_page_size(pdf).find("A4"), std::string::npos) << pdf_page_size(pdf);
+
+    const std::string text = pdf_text(pdf);
+    const nlohmann::json j = to_json(r);
+    auto expect_in_text = [&](const std::string& s) { EXPECT_NE(text.find(s), std::string::npos) << "missing: " << s; };
+
+    expect_in_text(j["header"]["machine"]["name"].get<std::string>());
+    expect_in_text(j["header"]["machine"]["type"].get<std::string>());
+    expect_in_text(j["header"]["instrument"]["serial"].get<std::string>());
+    expect_in_text(j["header"]["instrument"]["calibration_date"].get<std::string>());
+    expect_in_text(j["header"]["operator"].get<std::string>());
+    expect_in_text("page 1 of " + std::to_string(pages));
+    ASSERT_EQ(j["locations"].size(), r.locations.size());
+    for (const auto& l : j["locations"]) {
+        for (int k = 0; k < 3; ++k) {
+            expect_in_text(fmt2(l["error_um"][k].get<double>(), 2) + " ± " +
+                           fmt2(l["uncertainty_um"][k].get<double>(), 2));
+        }
+        expect_in_text(fmt2(l["magnitude_um"].get<double>(), 2));
+    }
+    ASSERT_EQ(j["orientation"].size(), r.orientation.size());
+    for (const auto& o : j["orientation"]) {
+        expect_in_text(fmt2(o["exact"]["deg"].get<double>(), 5) + "°");
+        expect_in_text(fmt2(o["exact"]["arcsec"].get<double>(), 1) + "″");
+        expect_in_text(fmt2(o["first_order"]["deg"].get<double>(), 5) + "°");
+        expect_in_text(fmt2(o["first_order"]["arcsec"].get<double>(), 1) + "″");
+    }
+    for (const auto& p : j["model"]["parameters"]) {
+        expect_in_text(p["name"].get<std::string>());
+        expect_in_text(fmt2(p["value"].get<double>(), 3));
+    }
+    for (const auto& s : j["discovery"]) expect_in_text(s["effect"].get<std::string>());
+    for (const auto& e : j["procedure"]) expect_in_text(e["step"].get<std::string>());
+    // Axis titles carry their units.
+    expect_in_text("session time (s)");
+    expect_in_text("bar displacement (µm)");
+    expect_in_text("orientation error (arcsec)");
+}
+
+INSTANTIATE_TEST_SUITE_P(AllTypes, RenderByType,
+                         ::testing::Values(analysis::MachineType::RRTTT, analysis::MachineType::TTTRR,
+                                           analysis::MachineType::RTTTR),
+                         [](const auto& p) { return std::string(analysis::to_string(p.param)); });
+
+TEST(Render, EmptySessionStillGivesAReadablePage) {
+    Report r;
+    r.header.session_id = 3;
+    r.header.machine.type = analysis::MachineType::RRTTT;
+    TempDir dir;
+    const auto pdf = dir.path / "empty.pdf";
+    const int pages = render_pdf(r, pdf.string());
+    EXPECT_EQ(pages, pdf_pages(pdf));
+    const std::string text = pdf_text(pdf);
+    EXPECT_NE(text.find("No location was solved"), std::string::npos);
+    EXPECT_NE(text.find("No procedure steps were recorded"), std::string::npos);
+}
+
+TEST(Render, LongTablesBreakAcrossPagesWithTheirHeader) {
+    Report r = testing::synthetic_report(analysis::MachineType::TTTRR, 1000, 2);
+    const int before = [&] {
+        TempDir dir;
+        return render_pdf(r, (dir.path / "a.pdf").string());
+    }();
+    for (int i = 0; i < 200; ++i)
+        r.procedure.push_back({1000.0 + i, "", "step", "extra step " + std::to_string(i), "detail"});
+    TempDir dir;
+    const auto pdf = dir.path / "long.pdf";
+    const int pages = render_pdf(r, pdf.string());
+    EXPECT_GE(pages, before + 2);
+    const std::string text = pdf_text(pdf);
+    EXPECT_NE(text.find("extra step 0"), std::string::npos);
+    EXPECT_NE(text.find("extra step 199"), std::string::npos);
+    // The table header ("timestamp") repeats on each page the table continues on.
+    std::size_t headers = 0;
+    for (auto pos = text.find("timestamp"); pos != std::string::npos; pos = text.find("timestamp", pos + 1)) ++headers;
+    EXPECT_GE(headers, 3u);
+}
+
+TEST(Render, UnwritablePathIsAClearError) {
+    const Report r = testing::synthetic_report(analysis::MachineType::RTTTR, 1000, 1);
+    try {
+        render_pdf(r, "/nonexistent-dir/report.pdf");
+        FAIL() << "no error";
+    } catch (const ReportError& e) {
+        EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/report.pdf"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Json, HoldsTheContentWithUnitsAndNullForMissing) {
+    Report r = testing::synthetic_report(analysis::MachineType::RRTTT, 20000, 5);
+    r.orientation[0].first_order_rad.reset();  // singular first-order model
+    const nlohmann::json j = to_json(r);
+    EXPECT_EQ(j["schema"], "ballbar-report/1");
+    EXPECT_TRUE(j["orientation"][0]["first_order"].is_null());
+    EXPECT_NEAR(j["orientation"][0]["exact"]["arcsec"].get<double>(),
+                analysis::rad_to_arcsec(*r.orientation[0].exact_rad), 1e-9);
+    EXPECT_EQ(j["bar_trace"]["samples"].get<std::uint64_t>(), 20000u);
+    EXPECT_EQ(j["bar_trace"]["time_s"].size(), r.trace.time_s.size());
+    EXPECT_LE(r.trace.time_s.size(), 4u * 2000u);
+    EXPECT_EQ(j["bar_trace"]["max_um"].get<double>(), *r.trace.max_um);
+    EXPECT_EQ(j["header"]["machine"].count("c_offset_mm"), 0u);  // an RRTTT has no C frame
+    EXPECT_EQ(j["locations"][1]["error_um"][2].get<double>(), r.locations[1].error_um.z());
+    EXPECT_EQ(j["compensation"]["axes"].size(), r.compensation.size());
+    EXPECT_TRUE(j["header"]["temperatures_C"]["air"].is_null());
+}
+
+}  // namespace
+}  // namespace ballbar::report
