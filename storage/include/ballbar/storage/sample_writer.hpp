@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: MIT
+// Streams a session's raw samples into the database in batches. A batch is committed as soon as it spans
+// `max_batch_device_time_us` of device time (100 ms by default) or holds `max_batch_samples`, so a crash
+// loses at most the last, uncommitted batch. Call flush() when the stream stalls or ends.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "ballbar/analysis/sample.hpp"
+#include "ballbar/storage/sqlite.hpp"
+#include "ballbar/storage/store.hpp"
+
+namespace ballbar::storage {
+
+struct SampleWriterOptions {
+    std::uint64_t max_batch_device_time_us = 100'000;  ///< commit when a batch spans this much device time
+    std::size_t max_batch_samples = 65'536;            ///< … or holds this many samples
+};
+
+class SampleWriter {
+  public:
+    /// Writes into `session_id`, which must be `running` and owned by `store`. Numbering continues after
+    /// the last stored sample (0 for a new session, last + 1 after resume_session()).
+    SampleWriter(Store& store, std::int64_t session_id, SampleWriterOptions options = {});
+    /// Flushes what is pending; errors are swallowed here — call flush() first to see them.
+    ~SampleWriter();
+    SampleWriter(const SampleWriter&) = delete;
+    SampleWriter& operator=(const SampleWriter&) = delete;
+
+    /// Queues a sample and commits the batch when it is due. The stored seq is the writer's own,
+    /// contiguous count (the sample's `seq` field is ignored); it is returned. Throws StorageError
+    /// (Kind::disk_full: "disk full: …") when a commit fails; the failed batch stays pending and every
+    /// batch committed before stays in the database.
+    std::uint64_t append(const analysis::BarSample& sample);
+    /// Commits everything pending (no-op when nothing is).
+    void flush();
+
+    std::uint64_t next_seq() const { return next_seq_; }
+    std::size_t pending() const { return pending_.size(); }
+    /// Samples committed by this writer.
+    std::uint64_t committed() const { return committed_; }
+
+  private:
+    static constexpr int kRowsPerInsert = 32;
+    void bind_row(Statement& st, int first_param, const analysis::BarSample& s, std::uint64_t seq);
+
+    Store& store_;
+    std::int64_t session_id_;
+    SampleWriterOptions options_;
+    Statement insert_one_;
+    Statement insert_many_;
+    std::vector<analysis::BarSample> pending_;
+    std::uint64_t next_seq_ = 0;  ///< seq of the next appended sample
+    std::uint64_t committed_ = 0;
+};
+
+}  // namespace ballbar::storage

@@ -1,0 +1,223 @@
+// SPDX-License-Identifier: MIT
+// The ballbar database: sessions with their audit trail, raw samples, points, results and identified
+// models, in one SQLite file (WAL mode). See docs/storage.md for the schema and the guarantees.
+//
+//   Store store(path);                                  // creates/migrates; marks crashed sessions interrupted
+//   auto id = store.create_session({...});              // state `created`
+//   store.start_session(id);                            // `running`; this Store now owns the session
+//   SampleWriter writer(store, id);  writer.append(s);  // batched commits (sample_writer.hpp)
+//   store.add_point(id, point);  store.finish_session(id);
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ballbar/analysis/reading.hpp"
+#include "ballbar/analysis/sample.hpp"
+#include "ballbar/analysis/types.hpp"
+#include "ballbar/storage/sqlite.hpp"
+
+namespace ballbar::storage {
+
+/// Where a session's samples came from.
+enum class SessionSource { device, emulator, imported };
+std::string_view to_string(SessionSource source);
+std::optional<SessionSource> parse_session_source(std::string_view text);
+
+/// Lifecycle of a session. `created` → `running` → `completed` | `aborted` | `failed`; a session found
+/// unfinished (created/running) with no live owner when a Store opens becomes `interrupted`, from which it
+/// can be resumed (→ `running`), completed with what it has, or aborted.
+enum class SessionState { created, running, completed, aborted, failed, interrupted };
+std::string_view to_string(SessionState state);
+std::optional<SessionState> parse_session_state(std::string_view text);
+/// Whether `from` → `to` is a legal transition.
+bool transition_allowed(SessionState from, SessionState to);
+
+/// The instrument (bar) a session was measured with. Keys of the readings file's `instrument` header.
+struct Instrument {
+    std::string model;
+    std::string serial;
+    std::string firmware;
+    std::optional<double> calibrated_length_mm;
+    std::string calibration_date;  ///< ISO 8601 date, empty when unknown
+    std::string extra_json;        ///< other keys of the `instrument` header, as a JSON object ("" = none)
+};
+
+/// What the caller knows when a session begins.
+struct NewSession {
+    analysis::MachineGeometry machine;
+    std::optional<Instrument> instrument;
+    SessionSource source = SessionSource::device;
+    std::string operator_name;
+    std::string procedure;  ///< e.g. "ssm" or a plan name; free text
+    std::string notes;
+    std::string started_at;     ///< ISO 8601; empty: now (the Store's clock)
+    std::string metadata_json;  ///< other metadata as a JSON object, e.g. unknown readings-file header keys
+};
+
+/// A stored session as read back.
+struct SessionInfo {
+    std::int64_t id = 0;
+    std::string uuid;
+    analysis::MachineGeometry machine;
+    std::optional<Instrument> instrument;
+    SessionSource source = SessionSource::device;
+    SessionState state = SessionState::created;
+    std::string operator_name;
+    std::string procedure;
+    std::string notes;
+    std::string started_at;
+    std::optional<std::string> ended_at;
+    std::string metadata_json;
+    std::int64_t sample_count = 0;
+    std::int64_t point_count = 0;
+};
+
+/// One entry of a session's audit trail.
+struct Transition {
+    std::optional<SessionState> from;  ///< empty for the creation entry
+    SessionState to = SessionState::created;
+    std::string event;  ///< why: "create", "start", "finish", "abort", "fail: …", "interrupted", "resume", …
+    std::string at;     ///< ISO 8601 UTC
+};
+
+/// One averaged reading of a session, with where it came from.
+struct PointRecord {
+    std::int64_t index = -1;  ///< order within the session (assigned by add_point)
+    analysis::Reading reading;
+    double nominal_mm = 0;                             ///< nominal bar length |b − s| at the commanded pose
+    std::optional<std::uint64_t> first_seq, last_seq;  ///< sample window averaged into the reading
+};
+
+/// A typed analysis result (SSM ΔV, orientation, identification, discovery, …).
+struct ResultRecord {
+    std::int64_t id = 0;
+    std::int64_t session_id = 0;
+    std::string kind;                      ///< e.g. "ssm", "identification", "discovery"
+    std::string payload_json;              ///< the result itself, a JSON document
+    std::optional<std::int64_t> model_id;  ///< the model version that produced it (models table), if any
+    std::string producer;                  ///< software/algorithm version, e.g. "ballbar 0.1.0 ssm/2"
+    std::string created_at;
+};
+
+/// One version of an identified parameter set. Versions of a name count 1, 2, …
+struct ModelRecord {
+    std::int64_t id = 0;
+    std::string name;
+    int version = 0;
+    std::optional<std::int64_t> parent_id;  ///< the version this one was refined from
+    std::string params_json;
+    std::string notes;
+    std::string created_at;
+    std::vector<std::int64_t> session_ids;  ///< sessions whose data identified it
+};
+
+struct StoreOptions {
+    /// Wall clock for audit times. Default: std::chrono::system_clock::now.
+    std::function<std::chrono::system_clock::time_point()> clock;
+    /// Seed for session UUIDs (deterministic tests); empty: std::random_device.
+    std::optional<std::uint64_t> uuid_seed;
+    int busy_timeout_ms = 5000;
+    /// Mark unfinished sessions whose owner is gone as `interrupted` on open (needs write access).
+    bool recover = true;
+    /// Open read-only (no migrations, no recovery). The file must exist.
+    bool read_only = false;
+    /// PRAGMA synchronous: true = FULL (each commit survives power loss), false = NORMAL (survives a
+    /// killed process; the last commits may be lost on power loss).
+    bool sync_full = true;
+};
+
+class Store {
+  public:
+    static constexpr int kSchemaVersion = 1;
+    static constexpr std::int64_t kApplicationId = 0x42424152;  // "BBAR"
+
+    /// Opens or creates the database at `path` and migrates it to kSchemaVersion. Throws StorageError:
+    /// Kind::corrupt for a file that is not a (complete) SQLite database, Kind::newer_schema for one
+    /// written by a newer ballbar — in both cases the file is left exactly as it was.
+    explicit Store(const std::string& path, StoreOptions options = {});
+    ~Store();
+    Store(const Store&) = delete;
+    Store& operator=(const Store&) = delete;
+
+    Database& db() { return db_; }
+    const std::string& path() const { return db_.path(); }
+    /// Sessions this open marked `interrupted`.
+    const std::vector<std::int64_t>& recovered_sessions() const { return recovered_; }
+    /// PRAGMA integrity_check: "ok" or the problems found.
+    std::string integrity_check();
+    /// ISO 8601 UTC time from the Store's clock, millisecond resolution.
+    std::string now_iso8601() const;
+
+    // Sessions ---------------------------------------------------------------------------------------
+    std::int64_t create_session(const NewSession& session);
+    /// Moves a session to `to`, recording the transition. Throws Kind::invalid for an illegal one.
+    void transition(std::int64_t session_id, SessionState to, std::string_view event);
+    void start_session(std::int64_t id) { transition(id, SessionState::running, "start"); }
+    void finish_session(std::int64_t id) { transition(id, SessionState::completed, "finish"); }
+    void abort_session(std::int64_t id, std::string_view why = "abort") { transition(id, SessionState::aborted, why); }
+    void fail_session(std::int64_t id, std::string_view why) { transition(id, SessionState::failed, why); }
+    /// Resumes an `interrupted` session (→ `running`); returns the seq the next sample gets.
+    std::uint64_t resume_session(std::int64_t id);
+    SessionInfo session(std::int64_t id);
+    std::vector<SessionInfo> sessions();
+    /// A session by numeric id or by a unique prefix of its uuid. Throws Kind::not_found / Kind::invalid.
+    std::int64_t find_session(std::string_view id_or_uuid_prefix);
+    std::vector<Transition> transitions(std::int64_t session_id);
+    void set_notes(std::int64_t session_id, std::string_view notes);
+
+    // Samples (write them with SampleWriter) ----------------------------------------------------------
+    std::int64_t sample_count(std::int64_t session_id);
+    /// The seq after the last stored sample (0 when none).
+    std::uint64_t next_seq(std::int64_t session_id);
+    /// Samples with seq in [from_seq, from_seq + limit), in order.
+    std::vector<analysis::BarSample> samples(std::int64_t session_id, std::uint64_t from_seq = 0,
+                                             std::size_t limit = SIZE_MAX);
+    /// Calls `fn` for every sample in order, without holding them all in memory.
+    void for_each_sample(std::int64_t session_id, const std::function<void(const analysis::BarSample&)>& fn);
+
+    // Points -----------------------------------------------------------------------------------------
+    /// Appends a point; returns its index within the session.
+    std::int64_t add_point(std::int64_t session_id, const PointRecord& point);
+    std::vector<PointRecord> points(std::int64_t session_id);
+
+    // Results and models ------------------------------------------------------------------------------
+    std::int64_t add_result(std::int64_t session_id, std::string_view kind, std::string_view payload_json,
+                            std::optional<std::int64_t> model_id = std::nullopt, std::string_view producer = {});
+    std::vector<ResultRecord> results(std::int64_t session_id);
+    /// Stores the next version of model `name`.
+    ModelRecord save_model(std::string_view name, std::string_view params_json,
+                           const std::vector<std::int64_t>& session_ids = {},
+                           std::optional<std::int64_t> parent_id = std::nullopt, std::string_view notes = {});
+    ModelRecord model(std::int64_t model_id);
+    /// All versions of `name`, oldest first.
+    std::vector<ModelRecord> model_history(std::string_view name);
+    std::optional<ModelRecord> latest_model(std::string_view name);
+
+  private:
+    void check_file(const std::string& path) const;
+    void migrate();
+    void recover_unfinished();
+    bool try_lock_session(std::int64_t id);
+    void unlock_session(std::int64_t id);
+    std::int64_t upsert_machine(const analysis::MachineGeometry& machine);
+    std::int64_t upsert_instrument(const Instrument& instrument);
+    std::string new_uuid();
+    SessionState state_of(std::int64_t session_id);
+    ModelRecord read_model(Statement& st);
+
+    StoreOptions options_;
+    Database db_;
+    int lock_fd_ = -1;
+    std::vector<std::int64_t> owned_;
+    std::vector<std::int64_t> recovered_;
+    std::uint64_t uuid_state_ = 0;
+};
+
+}  // namespace ballbar::storage

@@ -1,0 +1,432 @@
+// SPDX-License-Identifier: MIT
+// Parsing `ballbar-readings/1`: header lines, then RFC 4180 records mapped onto columns by name.
+#include "ballbar/storage/readings_file.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "ballbar/analysis/kinematics.hpp"
+#include "ballbar/storage/machine_json.hpp"
+
+namespace ballbar::storage {
+namespace {
+
+using nlohmann::json;
+
+constexpr std::string_view kMagic = "# ballbar-readings/1";
+
+/// Splits text into lines (LF or CRLF), remembering where each starts.
+class LineReader {
+  public:
+    explicit LineReader(std::string_view text) : text_(text) {}
+    bool done() const { return pos_ >= text_.size(); }
+    int line() const { return line_; }  // number of the line next() returns
+    std::string_view peek() const { return cut(pos_).first; }
+    std::string_view next() {
+        auto [line, end] = cut(pos_);
+        pos_ = end;
+        ++line_;
+        return line;
+    }
+    std::size_t pos() const { return pos_; }
+    void seek(std::size_t pos, int line) { pos_ = pos, line_ = line; }
+    std::string_view text() const { return text_; }
+
+  private:
+    std::pair<std::string_view, std::size_t> cut(std::size_t from) const {
+        std::size_t nl = text_.find('\n', from);
+        std::size_t end = nl == std::string_view::npos ? text_.size() : nl + 1;
+        std::string_view line = text_.substr(from, (nl == std::string_view::npos ? text_.size() : nl) - from);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        return {line, end};
+    }
+    std::string_view text_;
+    std::size_t pos_ = 0;
+    int line_ = 1;
+};
+
+std::string_view trim(std::string_view s) {
+    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+    return s;
+}
+
+bool is_blank(char c) {
+    return c == ' ' || c == '\t';
+}
+
+/// Reads one RFC 4180 record starting at the reader's position; quoted fields may span lines.
+std::vector<std::string> read_record(LineReader& in) {
+    const int start_line = in.line();
+    std::vector<std::string> fields;
+    std::string field;
+    std::string_view line = in.next();
+    std::size_t i = 0;
+    while (true) {  // one field per iteration
+        while (i < line.size() && is_blank(line[i])) ++i;
+        if (i < line.size() && line[i] == '"') {
+            ++i;
+            while (true) {
+                if (i >= line.size()) {
+                    if (in.done()) throw ReadingsFileError(start_line, "a quoted field is not closed");
+                    field += '\n';
+                    line = in.next();
+                    i = 0;
+                    continue;
+                }
+                const char c = line[i++];
+                if (c != '"') {
+                    field += c;
+                } else if (i < line.size() && line[i] == '"') {
+                    field += '"';
+                    ++i;
+                } else {
+                    break;
+                }
+            }
+            while (i < line.size() && is_blank(line[i])) ++i;
+            if (i < line.size() && line[i] != ',') {
+                throw ReadingsFileError(in.line() - 1, "unexpected text after a closing quote");
+            }
+        } else {
+            const std::size_t comma = line.find(',', i);
+            const std::size_t end = comma == std::string_view::npos ? line.size() : comma;
+            const std::string_view raw = line.substr(i, end - i);
+            if (raw.find('"') != std::string_view::npos) {
+                throw ReadingsFileError(in.line() - 1, "a quote inside an unquoted field");
+            }
+            field = std::string(trim(raw));
+            i = end;
+        }
+        fields.push_back(std::move(field));
+        field.clear();
+        if (i >= line.size()) break;
+        ++i;  // past the comma
+    }
+    return fields;
+}
+
+std::optional<double> parse_number(std::string_view s) {
+    if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+    if (s.empty()) return std::nullopt;
+    double v = 0;
+    const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc() || ptr != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+    return v;
+}
+
+enum class Col {
+    X,
+    Y,
+    Z,
+    rot1,
+    rot2,
+    sx,
+    sy,
+    sz,
+    measured,
+    nominal,
+    time,
+    bar_temp,
+    air_temp,
+    machine_temp,
+    location,
+    point,
+    step,
+    n,
+    std_mm,
+    count
+};
+
+struct ColumnSpec {
+    Col col;
+    std::string name;
+    bool required;
+};
+
+std::vector<ColumnSpec> columns_for(analysis::MachineType type) {
+    const auto rot = analysis::rotary_axes(type);
+    return {{Col::X, "X_mm", true},
+            {Col::Y, "Y_mm", true},
+            {Col::Z, "Z_mm", true},
+            {Col::rot1, std::string(1, rot.first) + "_deg", true},
+            {Col::rot2, std::string(1, rot.second) + "_deg", true},
+            {Col::sx, "socket_x_mm", true},
+            {Col::sy, "socket_y_mm", true},
+            {Col::sz, "socket_z_mm", true},
+            {Col::measured, "measured_mm", true},
+            {Col::nominal, "nominal_mm", false},
+            {Col::time, "time_s", false},
+            {Col::bar_temp, "bar_temp_C", false},
+            {Col::air_temp, "air_temp_C", false},
+            {Col::machine_temp, "machine_temp_C", false},
+            {Col::location, "location", false},
+            {Col::point, "point", false},
+            {Col::step, "step", false},
+            {Col::n, "n", false},
+            {Col::std_mm, "std_mm", false}};
+}
+
+void set_rotary(analysis::Pose& pose, char axis, double deg) {
+    const double rad = analysis::deg_to_rad(deg);
+    if (axis == 'A') pose.A_rad = rad;
+    if (axis == 'B') pose.B_rad = rad;
+    if (axis == 'C') pose.C_rad = rad;
+}
+
+struct Header {
+    std::optional<analysis::MachineGeometry> machine;
+    ReadingsMetadata meta;
+    std::vector<std::string> warnings;
+};
+
+std::string json_string(const json& v, std::string_view key, int line) {
+    if (!v.is_string()) throw ReadingsFileError(line, std::string(key) + " must be a JSON string");
+    return v.get<std::string>();
+}
+
+bool looks_iso8601(std::string_view s) {
+    auto digits = [&](std::size_t from, std::size_t n) {
+        if (s.size() < from + n) return false;
+        for (std::size_t i = from; i < from + n; ++i) {
+            if (s[i] < '0' || s[i] > '9') return false;
+        }
+        return true;
+    };
+    return digits(0, 4) && s.size() >= 10 && s[4] == '-' && digits(5, 2) && s[7] == '-' && digits(8, 2) &&
+           (s.size() == 10 || s[10] == 'T' || s[10] == ' ');
+}
+
+/// Handles one `# key: value` line; returns false when the line is a comment.
+bool header_line(std::string_view line, int lineno, Header& h, std::map<std::string, int>& seen) {
+    std::string_view body = line.substr(1);
+    if (!body.empty() && body.front() == ' ') body.remove_prefix(1);
+    const std::size_t colon = body.find(':');
+    if (colon == std::string_view::npos || colon == 0) return false;
+    const std::string key(body.substr(0, colon));
+    for (const char c : key) {
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
+    }
+    const std::string_view value = trim(body.substr(colon + 1));
+    const bool known =
+        key == "machine" || key == "instrument" || key == "operator" || key == "started_at" || key == "notes";
+    json v;
+    try {
+        v = json::parse(value);
+    } catch (const json::parse_error& e) {
+        if (!known) return false;  // a comment that happens to contain a colon
+        throw ReadingsFileError(lineno, "the value of \"" + key + "\" is not one line of JSON: " + e.what());
+    }
+    if (const auto it = seen.find(key); it != seen.end()) {
+        throw ReadingsFileError(
+            lineno, "header \"" + key + "\" given twice (first on line " + std::to_string(it->second) + ")");
+    }
+    seen[key] = lineno;
+    try {
+        if (key == "machine") {
+            h.machine = machine_from_json(value, &h.warnings);
+        } else if (key == "instrument") {
+            h.meta.instrument = instrument_from_json(value);
+        } else if (key == "operator") {
+            h.meta.operator_name = json_string(v, key, lineno);
+        } else if (key == "notes") {
+            h.meta.notes = json_string(v, key, lineno);
+        } else if (key == "started_at") {
+            h.meta.started_at = json_string(v, key, lineno);
+            if (!looks_iso8601(h.meta.started_at)) {
+                throw ReadingsFileError(lineno, "started_at \"" + h.meta.started_at + "\" is not an ISO 8601 time");
+            }
+        } else {
+            h.meta.extra.emplace_back(key, v.dump());
+        }
+    } catch (const FormatError& e) {
+        throw ReadingsFileError(lineno, e.what());
+    }
+    return true;
+}
+
+}  // namespace
+
+ReadingsFile parse_readings(std::string_view text) {
+    if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 byte-order mark
+    LineReader in(text);
+    if (in.done()) throw ReadingsFileError(1, "empty file; expected \"# ballbar-readings/1\"");
+    const std::string_view first = in.next();
+    if (first != kMagic) {
+        if (first.rfind("# ballbar-readings/", 0) == 0) {
+            throw ReadingsFileError(1, "unsupported format version \"" + std::string(first.substr(2)) +
+                                           "\"; this ballbar reads ballbar-readings/1");
+        }
+        throw ReadingsFileError(1, "not a readings file: line 1 must be \"# ballbar-readings/1\"");
+    }
+
+    Header h;
+    std::map<std::string, int> seen;
+    int columns_line = 0;
+    std::vector<std::string> names;
+    while (!in.done()) {
+        const int lineno = in.line();
+        const std::string_view line = in.peek();
+        if (trim(line).empty()) {
+            in.next();
+            continue;
+        }
+        if (line.front() == '#') {
+            in.next();
+            header_line(line, lineno, h, seen);
+            continue;
+        }
+        columns_line = lineno;
+        names = read_record(in);
+        break;
+    }
+    if (!h.machine) throw ReadingsFileError(seen.empty() ? 2 : in.line(), "no \"# machine: {...}\" header line");
+    if (columns_line == 0) throw ReadingsFileError(in.line(), "no column header row and no readings");
+
+    ReadingsFile out;
+    out.set.machine = *h.machine;
+    out.metadata = std::move(h.meta);
+    out.warnings = std::move(h.warnings);
+
+    // Map columns by name.
+    const auto specs = columns_for(out.set.machine.type);
+    std::vector<int> index(static_cast<std::size_t>(Col::count), -1);
+    std::vector<std::string> unknown;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        const std::string& name = names[i];
+        if (name.empty()) throw ReadingsFileError(columns_line, "column " + std::to_string(i + 1) + " has no name");
+        bool matched = false;
+        for (const auto& spec : specs) {
+            if (spec.name != name) continue;
+            auto& slot = index[static_cast<std::size_t>(spec.col)];
+            if (slot >= 0) throw ReadingsFileError(columns_line, "column \"" + name + "\" appears twice");
+            slot = static_cast<int>(i);
+            matched = true;
+        }
+        if (!matched) {
+            for (const auto& u : unknown) {
+                if (u == name) throw ReadingsFileError(columns_line, "column \"" + name + "\" appears twice");
+            }
+            unknown.push_back(name);
+        }
+    }
+    for (const auto& spec : specs) {
+        if (spec.required && index[static_cast<std::size_t>(spec.col)] < 0) {
+            throw ReadingsFileError(columns_line, "required column \"" + spec.name + "\" is missing (a " +
+                                                      std::string(analysis::to_string(out.set.machine.type)) +
+                                                      " file needs X_mm, Y_mm, Z_mm, " + specs[3].name + ", " +
+                                                      specs[4].name +
+                                                      ", socket_x_mm, socket_y_mm, socket_z_mm, measured_mm)");
+        }
+    }
+    if (!unknown.empty()) {
+        std::string list;
+        for (const auto& u : unknown) list += (list.empty() ? "\"" : ", \"") + u + "\"";
+        out.warnings.push_back("line " + std::to_string(columns_line) + ": unknown column" +
+                               (unknown.size() > 1 ? "s " : " ") + list + " ignored");
+    }
+
+    const auto rot = analysis::rotary_axes(out.set.machine.type);
+    while (!in.done()) {
+        const int lineno = in.line();
+        const std::string_view line = in.peek();
+        if (trim(line).empty()) {
+            in.next();
+            continue;
+        }
+        if (line.front() == '#') {
+            in.next();
+            std::map<std::string, int> none;
+            Header dummy;
+            if (header_line(line, lineno, dummy, none)) {
+                throw ReadingsFileError(lineno, "header line after the column row (headers come first)");
+            }
+            continue;
+        }
+        const auto fields = read_record(in);
+        if (fields.size() != names.size()) {
+            throw ReadingsFileError(lineno, std::to_string(fields.size()) + " fields, but the column row has " +
+                                                std::to_string(names.size()));
+        }
+        auto field = [&](Col c) -> std::optional<std::string_view> {
+            const int i = index[static_cast<std::size_t>(c)];
+            if (i < 0 || fields[static_cast<std::size_t>(i)].empty()) return std::nullopt;
+            return std::string_view(fields[static_cast<std::size_t>(i)]);
+        };
+        auto name_of = [&](Col c) { return names[static_cast<std::size_t>(index[static_cast<std::size_t>(c)])]; };
+        auto number = [&](Col c) -> std::optional<double> {
+            const auto f = field(c);
+            if (!f) {
+                if (specs[static_cast<std::size_t>(c)].required) {
+                    throw ReadingsFileError(lineno, "column \"" + name_of(c) + "\" is empty");
+                }
+                return std::nullopt;
+            }
+            const auto v = parse_number(*f);
+            if (!v) {
+                throw ReadingsFileError(
+                    lineno, "column \"" + name_of(c) + "\": \"" + std::string(*f) + "\" is not a finite number");
+            }
+            return v;
+        };
+        auto integer = [&](Col c, int min, int max) -> std::optional<int> {
+            const auto v = number(c);
+            if (!v) return std::nullopt;
+            if (*v != std::floor(*v) || *v < min || *v > max) {
+                throw ReadingsFileError(lineno, "column \"" + name_of(c) + "\": " + std::string(*field(c)) +
+                                                    " is not an integer in [" + std::to_string(min) + ", " +
+                                                    std::to_string(max) + "]");
+            }
+            return static_cast<int>(*v);
+        };
+
+        analysis::Reading r;
+        r.pose.X_mm = *number(Col::X);
+        r.pose.Y_mm = *number(Col::Y);
+        r.pose.Z_mm = *number(Col::Z);
+        set_rotary(r.pose, rot.first, *number(Col::rot1));
+        set_rotary(r.pose, rot.second, *number(Col::rot2));
+        r.socket_mm = {*number(Col::sx), *number(Col::sy), *number(Col::sz)};
+        r.measured_mm = *number(Col::measured);
+        if (!(r.measured_mm > 0)) throw ReadingsFileError(lineno, "measured_mm must be a positive length");
+        r.time_s = number(Col::time).value_or(0.0);
+        r.bar_temp_C = number(Col::bar_temp);
+        r.air_temp_C = number(Col::air_temp);
+        r.machine_temp_C = number(Col::machine_temp);
+        for (const auto& [c, t] : {std::pair{Col::bar_temp, r.bar_temp_C}, std::pair{Col::air_temp, r.air_temp_C},
+                                   std::pair{Col::machine_temp, r.machine_temp_C}}) {
+            if (t && *t < -273.15) throw ReadingsFileError(lineno, name_of(c) + " is below absolute zero");
+        }
+        r.location = integer(Col::location, 0, 1'000'000).value_or(-1);
+        r.point = integer(Col::point, 0, 1'000'000'000).value_or(-1);
+        r.step = integer(Col::step, 1, 2).value_or(0);
+        r.n = integer(Col::n, 1, 2'000'000'000).value_or(0);
+        r.std_mm = number(Col::std_mm);
+        if (r.std_mm && *r.std_mm < 0) throw ReadingsFileError(lineno, "std_mm must not be negative");
+
+        const double nominal = analysis::nominal_length(out.set.machine, r.pose, r.socket_mm);
+        if (const auto given = number(Col::nominal); given && std::abs(*given - nominal) > kNominalTolerance_mm) {
+            out.nominal_mismatches.push_back({lineno, out.set.readings.size(), *given, nominal});
+        }
+        out.nominal_mm.push_back(nominal);
+        out.set.readings.push_back(r);
+    }
+    if (out.set.readings.empty()) throw ReadingsFileError(in.line(), "the file has no readings");
+    return out;
+}
+
+ReadingsFile read_readings_file(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw ReadingsFileError(0, "cannot open " + path.string());
+    std::ostringstream buf;
+    buf << in.rdbuf();
+    if (in.bad()) throw ReadingsFileError(0, "cannot read " + path.string());
+    return parse_readings(buf.str());
+}
+
+}  // namespace ballbar::storage

@@ -1,0 +1,127 @@
+// SPDX-License-Identifier: MIT
+// Writing `ballbar-readings/1` with shortest round-tripping numbers.
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "ballbar/analysis/kinematics.hpp"
+#include "ballbar/storage/machine_json.hpp"
+#include "ballbar/storage/readings_file.hpp"
+
+namespace ballbar::storage {
+namespace {
+
+std::string shortest(double v) {
+    char buf[40];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+}
+
+/// Degrees whose text reads back (through deg_to_rad) to exactly `rad`, when such a double exists nearby.
+std::string degrees(double rad) {
+    const double d = analysis::rad_to_deg(rad);
+    if (analysis::deg_to_rad(d) == rad) return shortest(d);
+    double up = d, down = d;
+    for (int k = 0; k < 16; ++k) {
+        up = std::nextafter(up, std::numeric_limits<double>::infinity());
+        if (analysis::deg_to_rad(up) == rad) return shortest(up);
+        down = std::nextafter(down, -std::numeric_limits<double>::infinity());
+        if (analysis::deg_to_rad(down) == rad) return shortest(down);
+    }
+    return shortest(d);
+}
+
+double rotary(const analysis::Pose& pose, char axis) {
+    return axis == 'A' ? pose.A_rad : axis == 'B' ? pose.B_rad : pose.C_rad;
+}
+
+struct Column {
+    std::string name;
+    std::function<std::string(const analysis::Reading&)> value;  // "" = not given
+};
+
+std::string opt(const std::optional<double>& v) {
+    return v ? shortest(*v) : std::string();
+}
+
+}  // namespace
+
+std::string format_readings(const analysis::ReadingSet& set, const ReadingsMetadata& meta) {
+    using nlohmann::json;
+    std::string out = "# ballbar-readings/1\n";
+    out += "# machine: " + machine_to_json(set.machine) + "\n";
+    if (meta.instrument) out += "# instrument: " + instrument_to_json(*meta.instrument) + "\n";
+    if (!meta.operator_name.empty()) out += "# operator: " + json(meta.operator_name).dump() + "\n";
+    if (!meta.started_at.empty()) out += "# started_at: " + json(meta.started_at).dump() + "\n";
+    if (!meta.notes.empty()) out += "# notes: " + json(meta.notes).dump() + "\n";
+    for (const auto& [key, value] : meta.extra) out += "# " + key + ": " + value + "\n";
+
+    const auto rot = analysis::rotary_axes(set.machine.type);
+    const auto& machine = set.machine;
+    std::vector<Column> all = {
+        {"time_s", [](const auto& r) { return r.time_s != 0 ? shortest(r.time_s) : std::string(); }},
+        {"location", [](const auto& r) { return r.location >= 0 ? std::to_string(r.location) : std::string(); }},
+        {"point", [](const auto& r) { return r.point >= 0 ? std::to_string(r.point) : std::string(); }},
+        {"step", [](const auto& r) { return r.step > 0 ? std::to_string(r.step) : std::string(); }},
+        {"X_mm", [](const auto& r) { return shortest(r.pose.X_mm); }},
+        {"Y_mm", [](const auto& r) { return shortest(r.pose.Y_mm); }},
+        {"Z_mm", [](const auto& r) { return shortest(r.pose.Z_mm); }},
+        {std::string(1, rot.first) + "_deg", [a = rot.first](const auto& r) { return degrees(rotary(r.pose, a)); }},
+        {std::string(1, rot.second) + "_deg", [a = rot.second](const auto& r) { return degrees(rotary(r.pose, a)); }},
+        {"socket_x_mm", [](const auto& r) { return shortest(r.socket_mm.x()); }},
+        {"socket_y_mm", [](const auto& r) { return shortest(r.socket_mm.y()); }},
+        {"socket_z_mm", [](const auto& r) { return shortest(r.socket_mm.z()); }},
+        {"measured_mm", [](const auto& r) { return shortest(r.measured_mm); }},
+        {"nominal_mm",
+         [&machine](const auto& r) { return shortest(analysis::nominal_length(machine, r.pose, r.socket_mm)); }},
+        {"n", [](const auto& r) { return r.n > 0 ? std::to_string(r.n) : std::string(); }},
+        {"std_mm", [](const auto& r) { return opt(r.std_mm); }},
+        {"bar_temp_C", [](const auto& r) { return opt(r.bar_temp_C); }},
+        {"air_temp_C", [](const auto& r) { return opt(r.air_temp_C); }},
+        {"machine_temp_C", [](const auto& r) { return opt(r.machine_temp_C); }},
+    };
+    const std::vector<std::string> required = {"X_mm",        "Y_mm",        "Z_mm",        all[7].name,
+                                               all[8].name,   "socket_x_mm", "socket_y_mm", "socket_z_mm",
+                                               "measured_mm", "nominal_mm"};
+    std::vector<Column> cols;
+    for (auto& c : all) {
+        bool keep = std::find(required.begin(), required.end(), c.name) != required.end();
+        for (std::size_t i = 0; !keep && i < set.readings.size(); ++i) keep = !c.value(set.readings[i]).empty();
+        if (keep) cols.push_back(std::move(c));
+    }
+    for (std::size_t i = 0; i < cols.size(); ++i) out += (i ? "," : "") + cols[i].name;
+    out += '\n';
+    for (const auto& r : set.readings) {
+        for (std::size_t i = 0; i < cols.size(); ++i) {
+            if (i) out += ',';
+            out += cols[i].value(r);
+        }
+        out += '\n';
+    }
+    return out;
+}
+
+void write_readings_file(const std::filesystem::path& path, const analysis::ReadingSet& set,
+                         const ReadingsMetadata& metadata) {
+    const std::string text = format_readings(set, metadata);
+    const std::filesystem::path tmp = path.string() + ".tmp";
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        if (!out) throw std::runtime_error("cannot write " + tmp.string());
+        out << text;
+        out.flush();
+        if (!out) throw std::runtime_error("cannot write " + tmp.string());
+    }
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) {
+        std::filesystem::remove(tmp, ec);
+        throw std::runtime_error("cannot write " + path.string());
+    }
+}
+
+}  // namespace ballbar::storage

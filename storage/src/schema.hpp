@@ -1,0 +1,108 @@
+// SPDX-License-Identifier: MIT
+// The schema migrations: kMigrations[i] takes a database from user_version i to i + 1.
+#pragma once
+
+#include <array>
+#include <string_view>
+
+namespace ballbar::storage::detail {
+
+inline constexpr std::string_view kMigrationV1 = R"sql(
+CREATE TABLE instruments (
+  id INTEGER PRIMARY KEY,
+  model TEXT NOT NULL DEFAULT '',
+  serial TEXT NOT NULL DEFAULT '',
+  firmware TEXT NOT NULL DEFAULT '',
+  calibrated_length_mm REAL,
+  calibration_date TEXT NOT NULL DEFAULT '',
+  extra_json TEXT NOT NULL DEFAULT ''
+);
+CREATE TABLE machines (
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL DEFAULT '',
+  type TEXT NOT NULL CHECK (type IN ('RRTTT', 'TTTRR', 'RTTTR')),
+  geometry_json TEXT NOT NULL,
+  UNIQUE (geometry_json)
+);
+CREATE TABLE sessions (
+  id INTEGER PRIMARY KEY,
+  uuid TEXT NOT NULL UNIQUE,
+  machine_id INTEGER NOT NULL REFERENCES machines(id),
+  instrument_id INTEGER REFERENCES instruments(id),
+  source TEXT NOT NULL CHECK (source IN ('device', 'emulator', 'imported')),
+  state TEXT NOT NULL CHECK (state IN ('created', 'running', 'completed', 'aborted', 'failed', 'interrupted')),
+  operator TEXT NOT NULL DEFAULT '',
+  procedure TEXT NOT NULL DEFAULT '',
+  notes TEXT NOT NULL DEFAULT '',
+  started_at TEXT NOT NULL,
+  ended_at TEXT,
+  metadata_json TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX sessions_by_state ON sessions(state);
+CREATE TABLE session_transitions (
+  id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  from_state TEXT,
+  to_state TEXT NOT NULL,
+  event TEXT NOT NULL,
+  at TEXT NOT NULL
+);
+CREATE INDEX session_transitions_by_session ON session_transitions(session_id, id);
+CREATE TABLE samples (
+  session_id INTEGER NOT NULL,
+  seq INTEGER NOT NULL,
+  device_time_us INTEGER NOT NULL,
+  displacement_nm INTEGER NOT NULL,
+  flags INTEGER NOT NULL,
+  bar_temp_mC INTEGER NOT NULL,
+  PRIMARY KEY (session_id, seq)
+) WITHOUT ROWID;
+CREATE TABLE points (
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  idx INTEGER NOT NULL,
+  location INTEGER NOT NULL,
+  point INTEGER NOT NULL,
+  step INTEGER NOT NULL,
+  X_mm REAL NOT NULL, Y_mm REAL NOT NULL, Z_mm REAL NOT NULL,
+  A_rad REAL NOT NULL, B_rad REAL NOT NULL, C_rad REAL NOT NULL,
+  socket_x_mm REAL NOT NULL, socket_y_mm REAL NOT NULL, socket_z_mm REAL NOT NULL,
+  nominal_mm REAL NOT NULL,
+  mean_mm REAL NOT NULL,
+  std_mm REAL,
+  n INTEGER NOT NULL,
+  first_seq INTEGER,
+  last_seq INTEGER,
+  time_s REAL NOT NULL,
+  bar_temp_C REAL, air_temp_C REAL, machine_temp_C REAL,
+  PRIMARY KEY (session_id, idx)
+) WITHOUT ROWID;
+CREATE TABLE models (
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  version INTEGER NOT NULL,
+  parent_id INTEGER REFERENCES models(id),
+  params_json TEXT NOT NULL,
+  notes TEXT NOT NULL DEFAULT '',
+  created_at TEXT NOT NULL,
+  UNIQUE (name, version)
+);
+CREATE TABLE model_sessions (
+  model_id INTEGER NOT NULL REFERENCES models(id),
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  PRIMARY KEY (model_id, session_id)
+) WITHOUT ROWID;
+CREATE TABLE results (
+  id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  kind TEXT NOT NULL,
+  payload_json TEXT NOT NULL,
+  model_id INTEGER REFERENCES models(id),
+  producer TEXT NOT NULL DEFAULT '',
+  created_at TEXT NOT NULL
+);
+CREATE INDEX results_by_session ON results(session_id, kind);
+)sql";
+
+inline constexpr std::array<std::string_view, 1> kMigrations = {kMigrationV1};
+
+}  // namespace ballbar::storage::detail

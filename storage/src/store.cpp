@@ -1,0 +1,343 @@
+// SPDX-License-Identifier: MIT
+// Store: opening (file checks, migrations, WAL), session lifecycle with ownership locks, and recovery.
+#include "ballbar/storage/store.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "ballbar/storage/machine_json.hpp"
+#include "schema.hpp"
+
+namespace ballbar::storage {
+namespace {
+
+using Kind = StorageError::Kind;
+
+constexpr std::array<std::string_view, 6> kStateNames = {"created", "running", "completed",
+                                                         "aborted", "failed",  "interrupted"};
+constexpr std::array<std::string_view, 3> kSourceNames = {"device", "emulator", "imported"};
+
+std::uint32_t be32(const unsigned char* p) {
+    return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
+}
+
+std::uint64_t splitmix64(std::uint64_t& state) {
+    std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+bool is_memory(const std::string& path) {
+    return path.empty() || path == ":memory:" || path.rfind("file::memory:", 0) == 0;
+}
+
+}  // namespace
+
+std::string_view to_string(SessionState state) {
+    return kStateNames[static_cast<std::size_t>(state)];
+}
+
+std::optional<SessionState> parse_session_state(std::string_view text) {
+    for (std::size_t i = 0; i < kStateNames.size(); ++i) {
+        if (kStateNames[i] == text) return static_cast<SessionState>(i);
+    }
+    return std::nullopt;
+}
+
+std::string_view to_string(SessionSource source) {
+    return kSourceNames[static_cast<std::size_t>(source)];
+}
+
+std::optional<SessionSource> parse_session_source(std::string_view text) {
+    for (std::size_t i = 0; i < kSourceNames.size(); ++i) {
+        if (kSourceNames[i] == text) return static_cast<SessionSource>(i);
+    }
+    return std::nullopt;
+}
+
+bool transition_allowed(SessionState from, SessionState to) {
+    using S = SessionState;
+    switch (from) {
+        case S::created:
+            return to == S::running || to == S::aborted || to == S::interrupted || to == S::completed;
+        case S::running:
+            return to == S::completed || to == S::aborted || to == S::failed || to == S::interrupted;
+        case S::interrupted:
+            return to == S::running || to == S::completed || to == S::aborted;
+        case S::completed:
+        case S::aborted:
+        case S::failed:
+            return false;
+    }
+    return false;
+}
+
+Store::Store(const std::string& path, StoreOptions options)
+    : options_(std::move(options)),
+      db_((check_file(path), path),
+          options_.read_only ? Database::Mode::read_only : Database::Mode::read_write_create) {
+    if (!options_.clock) options_.clock = [] { return std::chrono::system_clock::now(); };
+    uuid_state_ = options_.uuid_seed ? *options_.uuid_seed
+                                     : (std::uint64_t{std::random_device{}()} << 32) ^ std::random_device{}();
+    db_.set_busy_timeout(options_.busy_timeout_ms);
+
+    // Read-only checks first: nothing may be written to a file we refuse.
+    const std::int64_t version = db_.query_int("PRAGMA user_version");
+    const std::int64_t app_id = db_.query_int("PRAGMA application_id");
+    if (version > kSchemaVersion) {
+        throw StorageError(Kind::newer_schema, path + " has schema version " + std::to_string(version) +
+                                                   ", newer than this ballbar understands (" +
+                                                   std::to_string(kSchemaVersion) +
+                                                   "); upgrade ballbar. The file was not changed.");
+    }
+    if (app_id != 0 && app_id != kApplicationId) {
+        throw StorageError(Kind::invalid, path + " is an SQLite database of another application; not changed");
+    }
+    if (app_id == 0 && db_.query_int("SELECT count(*) FROM sqlite_schema") > 0) {
+        throw StorageError(Kind::invalid, path + " is an SQLite database but not a ballbar one; not changed");
+    }
+    if (options_.read_only) return;
+
+    if (!is_memory(path)) {
+        db_.exec("PRAGMA journal_mode = WAL");
+        lock_fd_ = ::open((path + ".lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (lock_fd_ < 0) {
+            throw StorageError(Kind::sqlite, "cannot open the session lock file " + path + ".lock");
+        }
+    }
+    db_.exec(options_.sync_full ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
+    db_.exec("PRAGMA foreign_keys = ON");
+    migrate();
+    if (options_.recover) recover_unfinished();
+}
+
+Store::~Store() {
+    if (lock_fd_ >= 0) ::close(lock_fd_);  // releases every session lock of this Store
+}
+
+void Store::check_file(const std::string& path) const {
+    if (is_memory(path)) return;
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) {
+        if (options_.read_only) throw StorageError(Kind::not_found, "no database at " + path);
+        return;
+    }
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec) throw StorageError(Kind::sqlite, "cannot read " + path + ": " + ec.message());
+    if (size == 0) return;  // an empty file is a new database
+    if (size < 100) {
+        throw StorageError(Kind::corrupt,
+                           path + " is not a ballbar database (only " + std::to_string(size) + " bytes); not changed");
+    }
+    std::array<unsigned char, 100> header{};
+    std::ifstream in(path, std::ios::binary);
+    in.read(reinterpret_cast<char*>(header.data()), header.size());
+    if (!in) throw StorageError(Kind::sqlite, "cannot read " + path);
+    if (std::string_view(reinterpret_cast<const char*>(header.data()), 16) !=
+        std::string_view("SQLite format 3\0", 16)) {
+        throw StorageError(Kind::corrupt, path + " is not an SQLite database (bad header); not changed");
+    }
+    std::uint32_t page_size = (std::uint32_t{header[16]} << 8) | header[17];
+    if (page_size == 1) page_size = 65536;
+    const std::uint32_t pages = be32(&header[28]);
+    const bool size_valid = be32(&header[92]) == be32(&header[24]);
+    // A crash during a checkpoint can leave the header ahead of the file; the WAL then still holds the pages.
+    const auto wal_size = std::filesystem::file_size(path + "-wal", ec);
+    const bool wal_pending = !ec && wal_size > 0;
+    if (size_valid && !wal_pending && std::uint64_t{pages} * page_size > size) {
+        throw StorageError(Kind::corrupt, path + " is truncated (" + std::to_string(size) + " of " +
+                                              std::to_string(std::uint64_t{pages} * page_size) +
+                                              " bytes); not changed");
+    }
+}
+
+void Store::migrate() {
+    const auto version = static_cast<std::size_t>(db_.query_int("PRAGMA user_version"));
+    for (std::size_t v = version; v < detail::kMigrations.size(); ++v) {
+        Transaction tx(db_);
+        db_.exec(detail::kMigrations[v]);
+        db_.exec("PRAGMA user_version = " + std::to_string(v + 1));
+        db_.exec("PRAGMA application_id = " + std::to_string(kApplicationId));
+        tx.commit();
+    }
+}
+
+bool Store::try_lock_session(std::int64_t id) {
+    if (lock_fd_ < 0) return true;
+    struct flock fl {};
+    fl.l_type = F_WRLCK;
+    fl.l_whence = SEEK_SET;
+    fl.l_start = static_cast<off_t>(id);
+    fl.l_len = 1;
+    if (::fcntl(lock_fd_, F_OFD_SETLK, &fl) != 0) return false;
+    if (std::find(owned_.begin(), owned_.end(), id) == owned_.end()) owned_.push_back(id);
+    return true;
+}
+
+void Store::unlock_session(std::int64_t id) {
+    owned_.erase(std::remove(owned_.begin(), owned_.end(), id), owned_.end());
+    if (lock_fd_ < 0) return;
+    struct flock fl {};
+    fl.l_type = F_UNLCK;
+    fl.l_whence = SEEK_SET;
+    fl.l_start = static_cast<off_t>(id);
+    fl.l_len = 1;
+    ::fcntl(lock_fd_, F_OFD_SETLK, &fl);
+}
+
+void Store::recover_unfinished() {
+    Transaction tx(db_);
+    std::vector<std::int64_t> ids;
+    {
+        auto st = db_.prepare("SELECT id FROM sessions WHERE state IN ('created', 'running') ORDER BY id");
+        while (st.step()) ids.push_back(st.column_int(0));
+    }
+    std::vector<std::int64_t> orphaned;
+    for (const auto id : ids) {
+        if (lock_fd_ >= 0 && try_lock_session(id)) orphaned.push_back(id);  // no live owner holds it
+    }
+    for (const auto id : orphaned) transition(id, SessionState::interrupted, "interrupted: found unfinished on open");
+    tx.commit();
+    recovered_ = orphaned;
+}
+
+std::string Store::now_iso8601() const {
+    const auto now = options_.clock();
+    const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count();
+    const std::time_t secs = static_cast<std::time_t>(ms / 1000);
+    std::tm tm{};
+    gmtime_r(&secs, &tm);
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
+                  tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms % 1000));
+    return buf;
+}
+
+std::string Store::integrity_check() {
+    auto st = db_.prepare("PRAGMA integrity_check");
+    std::string out;
+    while (st.step()) {
+        if (!out.empty()) out += '\n';
+        out += st.column_text(0);
+    }
+    return out;
+}
+
+std::string Store::new_uuid() {
+    std::uint64_t hi = splitmix64(uuid_state_), lo = splitmix64(uuid_state_);
+    hi = (hi & 0xffffffffffff0fffull) | 0x0000000000004000ull;  // version 4
+    lo = (lo & 0x3fffffffffffffffull) | 0x8000000000000000ull;  // variant 10
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%08x-%04x-%04x-%04x-%012llx", static_cast<unsigned>(hi >> 32),
+                  static_cast<unsigned>((hi >> 16) & 0xffff), static_cast<unsigned>(hi & 0xffff),
+                  static_cast<unsigned>(lo >> 48), static_cast<unsigned long long>(lo & 0xffffffffffffull));
+    return buf;
+}
+
+std::int64_t Store::upsert_machine(const analysis::MachineGeometry& machine) {
+    const std::string json = machine_to_json(machine);
+    auto find = db_.prepare("SELECT id FROM machines WHERE geometry_json = ?");
+    find.bind(1, json);
+    if (find.step()) return find.column_int(0);
+    auto ins = db_.prepare("INSERT INTO machines(name, type, geometry_json) VALUES (?, ?, ?)");
+    ins.bind(1, machine.name).bind(2, analysis::to_string(machine.type)).bind(3, json).run();
+    return db_.last_insert_rowid();
+}
+
+std::int64_t Store::upsert_instrument(const Instrument& in) {
+    auto find = db_.prepare(
+        "SELECT id FROM instruments WHERE model = ? AND serial = ? AND firmware = ? AND calibrated_length_mm IS ? "
+        "AND calibration_date = ? AND extra_json = ?");
+    find.bind(1, in.model).bind(2, in.serial).bind(3, in.firmware).bind(4, in.calibrated_length_mm);
+    find.bind(5, in.calibration_date).bind(6, in.extra_json);
+    if (find.step()) return find.column_int(0);
+    auto ins = db_.prepare(
+        "INSERT INTO instruments(model, serial, firmware, calibrated_length_mm, calibration_date, extra_json) "
+        "VALUES (?, ?, ?, ?, ?, ?)");
+    ins.bind(1, in.model).bind(2, in.serial).bind(3, in.firmware).bind(4, in.calibrated_length_mm);
+    ins.bind(5, in.calibration_date).bind(6, in.extra_json).run();
+    return db_.last_insert_rowid();
+}
+
+std::int64_t Store::create_session(const NewSession& s) {
+    Transaction tx(db_);
+    const std::int64_t machine_id = upsert_machine(s.machine);
+    std::optional<std::int64_t> instrument_id;
+    if (s.instrument) instrument_id = upsert_instrument(*s.instrument);
+    const std::string now = now_iso8601();
+    auto ins = db_.prepare(
+        "INSERT INTO sessions(uuid, machine_id, instrument_id, source, state, operator, procedure, notes, "
+        "started_at, metadata_json) VALUES (?, ?, ?, ?, 'created', ?, ?, ?, ?, ?)");
+    ins.bind(1, new_uuid()).bind(2, machine_id).bind(3, instrument_id).bind(4, to_string(s.source));
+    ins.bind(5, s.operator_name).bind(6, s.procedure).bind(7, s.notes);
+    ins.bind(8, s.started_at.empty() ? now : s.started_at).bind(9, s.metadata_json).run();
+    const std::int64_t id = db_.last_insert_rowid();
+    auto tr = db_.prepare(
+        "INSERT INTO session_transitions(session_id, from_state, to_state, event, at) VALUES (?, NULL, 'created', "
+        "'create', ?)");
+    tr.bind(1, id).bind(2, now).run();
+    // Own the session before anyone can see it, so a concurrent open does not take it for orphaned.
+    if (!try_lock_session(id)) throw StorageError(Kind::invalid, "cannot lock new session " + std::to_string(id));
+    tx.commit();
+    return id;
+}
+
+SessionState Store::state_of(std::int64_t session_id) {
+    auto st = db_.prepare("SELECT state FROM sessions WHERE id = ?");
+    st.bind(1, session_id);
+    if (!st.step()) throw StorageError(Kind::not_found, "no session " + std::to_string(session_id));
+    const auto state = parse_session_state(st.column_text(0));
+    if (!state) throw StorageError(Kind::corrupt, "session " + std::to_string(session_id) + " has an unknown state");
+    return *state;
+}
+
+void Store::transition(std::int64_t session_id, SessionState to, std::string_view event) {
+    Transaction tx(db_);
+    const SessionState from = state_of(session_id);
+    if (!transition_allowed(from, to)) {
+        throw StorageError(Kind::invalid, "session " + std::to_string(session_id) + " cannot go from " +
+                                              std::string(to_string(from)) + " to " + std::string(to_string(to)));
+    }
+    if ((to == SessionState::running || to == SessionState::created) && !try_lock_session(session_id)) {
+        throw StorageError(Kind::invalid,
+                           "session " + std::to_string(session_id) + " is being written by another process");
+    }
+    const std::string now = now_iso8601();
+    const bool ends = to == SessionState::completed || to == SessionState::aborted || to == SessionState::failed;
+    auto up =
+        db_.prepare("UPDATE sessions SET state = ?, ended_at = CASE WHEN ? THEN ? ELSE ended_at END WHERE id = ?");
+    up.bind(1, to_string(to)).bind(2, ends ? 1 : 0).bind(3, now).bind(4, session_id).run();
+    auto tr = db_.prepare(
+        "INSERT INTO session_transitions(session_id, from_state, to_state, event, at) VALUES (?, ?, ?, ?, ?)");
+    tr.bind(1, session_id).bind(2, to_string(from)).bind(3, to_string(to)).bind(4, event).bind(5, now).run();
+    tx.commit();
+    if (to != SessionState::running && to != SessionState::created) unlock_session(session_id);
+}
+
+std::uint64_t Store::resume_session(std::int64_t id) {
+    const SessionState state = state_of(id);
+    if (state != SessionState::interrupted) {
+        throw StorageError(Kind::invalid, "session " + std::to_string(id) + " is " + std::string(to_string(state)) +
+                                              ", only an interrupted session can be resumed");
+    }
+    transition(id, SessionState::running, "resume");
+    return next_seq(id);
+}
+
+void Store::set_notes(std::int64_t session_id, std::string_view notes) {
+    auto st = db_.prepare("UPDATE sessions SET notes = ? WHERE id = ?");
+    st.bind(1, notes).bind(2, session_id).run();
+    if (db_.changes() == 0) throw StorageError(Kind::not_found, "no session " + std::to_string(session_id));
+}
+
+}  // namespace ballbar::storage
