@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: MIT
+// The guided two-step SSM procedure as an explicit state machine: one enum of states, one enum of
+// events, one transition function. Every event is checked against the current state; an illegal one is
+// refused with an error naming both. docs/procedure.md draws the graph.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace ballbar::acquisition {
+
+enum class State {
+    Connecting,        ///< opening the instrument
+    InstrumentCheck,   ///< battery, temperature, reference set on the calibrator
+    SetUp,             ///< machine type and geometry, socket position, bar length, layout
+    Step1Positioning,  ///< the machine moves to the test's location with the rotary axes at their start
+    Step1Capture,      ///< SSM points of step 1 are captured
+    Step2Rotation,     ///< the rotary axes turn to the test's rotation pair (RTTTR-α: the socket is remounted)
+    Step2Capture,      ///< SSM points of step 2 are captured
+    Computing,         ///< SSM and the orientation model of the test
+    Review,            ///< the operator reviews the results
+    Done,
+    Paused,   ///< the instrument was lost; continues at the same point when it is back
+    Aborted,  ///< stopped by the operator
+    Failed,   ///< cannot continue (instrument check failed, instrument gone for good, computation failed)
+};
+constexpr int kStateCount = static_cast<int>(State::Failed) + 1;
+
+enum class Event {
+    Connected,       ///< the instrument answered
+    CheckPassed,     ///< battery, temperature and reference are fine
+    SetUpConfirmed,  ///< the operator confirmed the set-up (or the plan answered for them)
+    InPosition,      ///< the machine reached the step's first point (positioning or rotation finished)
+    PointCaptured,   ///< one point of the current step was captured and passed its checks
+    PointRejected,   ///< one point failed its checks and will be captured again
+    StepComplete,    ///< every point of the current step is captured
+    NextTest,        ///< the test is computed and another test of the plan follows
+    AllTestsDone,    ///< the last test is computed
+    Accepted,        ///< the operator accepted the results
+    DeviceLost,      ///< the link to the instrument went away
+    DeviceBack,      ///< the instrument is back; the session continues where it was
+    Abort,           ///< the operator stopped the session
+    Fail,            ///< an unrecoverable error
+};
+constexpr int kEventCount = static_cast<int>(Event::Fail) + 1;
+
+std::string_view to_string(State s);
+std::string_view to_string(Event e);
+std::optional<State> parse_state(std::string_view text);
+bool is_terminal(State s);
+
+/// Refused event: "event PointCaptured is not allowed in state SetUp".
+class TransitionError : public std::logic_error {
+  public:
+    TransitionError(State state, Event event);
+    State state() const { return state_; }
+    Event event() const { return event_; }
+
+  private:
+    State state_;
+    Event event_;
+};
+
+/// The transition function. `paused_from` is the state a Paused session goes back to on DeviceBack
+/// (ignored elsewhere). Returns nullopt when the event is illegal in `state`.
+std::optional<State> transition(State state, Event event, State paused_from = State::Connecting);
+
+/// Holds the current state and applies events through `transition`, remembering where a pause came
+/// from. Throws TransitionError for an illegal event and leaves the state unchanged.
+class StateMachine {
+  public:
+    explicit StateMachine(State initial = State::Connecting) : state_(initial) {}
+    State state() const { return state_; }
+    /// Applies `event` and returns the new state.
+    State apply(Event event);
+    bool can_apply(Event event) const { return transition(state_, event, paused_from_).has_value(); }
+    State paused_from() const { return paused_from_; }
+
+  private:
+    State state_;
+    State paused_from_ = State::Connecting;
+};
+
+}  // namespace ballbar::acquisition
