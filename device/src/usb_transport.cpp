@@ -197,7 +197,9 @@ std::unique_ptr<Transport> open_usb_transport(std::uint16_t vid, std::uint16_t p
     ContextGuard ctx;
     if (int rc = libusb_init(&ctx.ctx); rc != 0) {
         ctx.ctx = nullptr;
-        throw DeviceError(DeviceErrorKind::Io, "cannot initialise libusb: " + libusb_text(rc));
+        // typically: no usbfs on this machine (containers), so there is no such device to open
+        throw DeviceError(DeviceErrorKind::NotFound,
+                          "no USB device " + name + " found: USB is not available (libusb: " + libusb_text(rc) + ")");
     }
     ListGuard devices;
     const ssize_t count = libusb_get_device_list(ctx.ctx, &devices.list);
