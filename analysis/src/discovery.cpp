@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 
@@ -33,10 +34,12 @@ std::string column_name(std::span<const Param> params, Eigen::Index col) {
     return "socket" + std::to_string(s / 3) + "." + "xyz"[s % 3];
 }
 
+/// Adds a group unless it is already reported (or contained in a reported one).
 void add_group(std::vector<std::vector<std::string>>& groups, std::vector<std::string> group) {
-    std::sort(group.begin() + 1, group.end());
     for (const auto& g : groups)
-        if (g == group) return;
+        if (std::all_of(group.begin(), group.end(),
+                        [&g](const std::string& name) { return std::find(g.begin(), g.end(), name) != g.end(); }))
+            return;
     groups.push_back(std::move(group));
 }
 
@@ -108,6 +111,171 @@ FitSummary fit_model(const ReadingSet& readings, const std::vector<Param>& model
 
 double explained_r2(const Eigen::VectorXd& r, const Eigen::MatrixXd& vars, ExplainingVariable v);
 
+/// The open candidates' linearised scores in one step, and what the subset search needs.
+struct StepScores {
+    std::vector<CandidateScore> scores;  ///< testable candidates
+    std::vector<Eigen::Index> cols;      ///< their Jacobian columns
+    Eigen::MatrixXd p;                   ///< Gram matrix of their columns with the model projected out
+    Eigen::VectorXd t;                   ///< their projected scores against the residual
+    double sigma2 = 0;                   ///< noise variance with every testable candidate added
+    double dof = 0;                      ///< its degrees of freedom
+};
+
+/// Smallest eigenvalue of a Gram matrix scaled to unit diagonal.
+double min_scaled_eigenvalue(const Eigen::MatrixXd& g) {
+    const Eigen::VectorXd d = g.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+    const Eigen::MatrixXd q = d.asDiagonal() * g * d.asDiagonal();
+    return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(q, Eigen::EigenvaluesOnly).eigenvalues()[0];
+}
+
+StepScores score_candidates(const StepContext& ctx, const Projection& proj, const Eigen::VectorXd& r,
+                            std::vector<const Effect*>& open, DiscoveryResult& out) {
+    StepScores sc;
+    const Eigen::VectorXd g = ctx.jac.transpose() * r;
+    const Eigen::VectorXd gm = proj.gmm_pinv * proj.model_part(g);
+    const double rss = r.squaredNorm();
+    const auto n = static_cast<double>(r.size());
+    const auto pm = static_cast<double>(proj.model.size());
+    std::vector<double> t;
+    for (auto it = open.begin(); it != open.end();) {
+        const Eigen::Index c = column_of(ctx, (*it)->param);
+        const double pn = std::max(0.0, proj.inner(ctx.gram, c, c));
+        CandidateScore s{*it, std::sqrt(pn / std::max(ctx.gram(c, c), 1e-300)), 0, 0, 1, false};
+        if (ctx.gram(c, c) == 0 || s.independence < ctx.options.min_independence) {
+            // The model absorbs it: unidentifiable, confounded with the model columns it is made of.
+            out.unidentifiable.push_back(std::string((*it)->id));
+            const Eigen::VectorXd beta = proj.gmm_pinv * proj.cross(ctx.gram, c);
+            const double big = beta.size() ? beta.cwiseAbs().maxCoeff() : 0.0;
+            std::vector<std::string> group{std::string((*it)->id)};
+            for (std::size_t i = 0; i < proj.model.size(); ++i)
+                if (big > 0 && std::abs(beta[static_cast<Eigen::Index>(i)]) >= 0.1 * big)
+                    group.push_back(column_name(ctx.columns, proj.model[i]));
+            if (group.size() > 1) add_group(out.confounded, group);
+            it = open.erase(it);
+            continue;
+        }
+        t.push_back(g[c] - proj.cross(ctx.gram, c).dot(gm));
+        s.delta_rss_mm2 = std::min(t.back() * t.back() / pn, rss);
+        sc.scores.push_back(s);
+        sc.cols.push_back(c);
+        ++it;
+    }
+    const auto m = static_cast<Eigen::Index>(sc.cols.size());
+    sc.t = Eigen::Map<const Eigen::VectorXd>(t.data(), m);
+    sc.p.resize(m, m);
+    for (Eigen::Index i = 0; i < m; ++i)
+        for (Eigen::Index j = 0; j < m; ++j) sc.p(i, j) = proj.inner(ctx.gram, sc.cols[i], sc.cols[j]);
+    // Noise variance from the model with every testable candidate (pseudo-inverse: dependent
+    // combinations count once).
+    if (m > 0) {
+        const Eigen::VectorXd d = sc.p.diagonal().cwiseSqrt().cwiseInverse();
+        const Eigen::MatrixXd q = d.asDiagonal() * sc.p * d.asDiagonal();
+        const double tol = ctx.options.min_independence * ctx.options.min_independence;
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(q);
+        double reduction = 0;
+        int rank = 0;
+        const Eigen::VectorXd proj_t = es.eigenvectors().transpose() * (d.asDiagonal() * sc.t);
+        for (Eigen::Index k = 0; k < m; ++k)
+            if (es.eigenvalues()[k] > tol) {
+                reduction += proj_t[k] * proj_t[k] / es.eigenvalues()[k];
+                ++rank;
+            }
+        sc.dof = n - pm - rank;
+        sc.sigma2 = sc.dof > 0 ? std::max(rss - reduction, 0.0) / sc.dof : 0.0;
+    }
+    for (auto& s : sc.scores) {
+        s.f = sc.sigma2 > 0 ? s.delta_rss_mm2 / sc.sigma2 : 0.0;
+        s.p_value = sc.dof > 0 ? f_distribution_sf(s.f, 1.0, sc.dof) : 1.0;
+        s.passes = s.p_value < ctx.options.family_alpha / static_cast<double>(m);
+    }
+    return sc;
+}
+
+/// Groups of testable candidates the data cannot tell apart: near-null combinations of their
+/// projected columns (an eigenvalue of the unit-scaled projected Gram matrix below 1 − confound_cos).
+void report_confounded_groups(const StepScores& sc, const DiscoveryOptions& options, DiscoveryResult& out) {
+    const Eigen::Index m = sc.p.rows();
+    if (m < 2) return;
+    const Eigen::VectorXd d = sc.p.diagonal().cwiseSqrt().cwiseInverse();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(d.asDiagonal() * sc.p * d.asDiagonal());
+    for (Eigen::Index k = 0; k < m && es.eigenvalues()[k] < 1.0 - options.confound_cos; ++k) {
+        const Eigen::VectorXd v = es.eigenvectors().col(k);
+        const double big = v.cwiseAbs().maxCoeff();
+        std::vector<std::pair<double, std::string>> members;
+        for (Eigen::Index i = 0; i < m; ++i)
+            if (std::abs(v[i]) >= 0.3 * big)
+                members.emplace_back(-std::abs(v[i]), std::string(sc.scores[static_cast<std::size_t>(i)].effect->id));
+        if (members.size() < 2) continue;
+        std::sort(members.begin(), members.end());
+        std::vector<std::string> group;
+        for (auto& [w, id] : members) group.push_back(std::move(id));
+        add_group(out.confounded, std::move(group));
+    }
+}
+
+/// The F value a single added parameter must exceed at false-alarm rate `alpha`.
+double f_critical(double alpha, double dof) {
+    double lo = 0, hi = 1;
+    while (f_distribution_sf(hi, 1.0, dof) > alpha && hi < 1e12) hi *= 2;
+    for (int i = 0; i < 100 && hi - lo > 1e-9 * hi; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (f_distribution_sf(mid, 1.0, dof) > alpha ? lo : hi) = mid;
+    }
+    return hi;
+}
+
+/// The sparsest explanation: the subset S of testable candidates (|S| ≤ max_subset, members not
+/// confounded with each other) minimising −ΔRSS(S)/σ² + λ·|S|, λ the single-parameter F threshold.
+/// Empty when no subset beats the model as it is.
+std::vector<std::size_t> best_subset(const StepScores& sc, const DiscoveryOptions& options, double lambda) {
+    const std::size_t m = sc.scores.size();
+    const double tol = options.min_independence * options.min_independence;
+    std::vector<std::size_t> best, cur;
+    double best_cost = 0;
+    auto visit = [&](auto&& self, std::size_t from) -> void {
+        if (!cur.empty()) {
+            const auto k = static_cast<Eigen::Index>(cur.size());
+            Eigen::MatrixXd pss(k, k);
+            Eigen::VectorXd ts(k);
+            for (Eigen::Index i = 0; i < k; ++i) {
+                ts[i] = sc.t[static_cast<Eigen::Index>(cur[static_cast<std::size_t>(i)])];
+                for (Eigen::Index j = 0; j < k; ++j)
+                    pss(i, j) = sc.p(static_cast<Eigen::Index>(cur[static_cast<std::size_t>(i)]),
+                                     static_cast<Eigen::Index>(cur[static_cast<std::size_t>(j)]));
+            }
+            if (k > 1 && min_scaled_eigenvalue(pss) < tol) return;  // members confounded: not a subset to fit
+            const double reduction = ts.dot(pss.ldlt().solve(ts));
+            const double cost = -reduction / sc.sigma2 + lambda * static_cast<double>(k);
+            if (cost < best_cost) {
+                best_cost = cost;
+                best = cur;
+            }
+        }
+        if (cur.size() >= static_cast<std::size_t>(options.max_subset)) return;
+        for (std::size_t i = from; i < m; ++i) {
+            cur.push_back(i);
+            self(self, i + 1);
+            cur.pop_back();
+        }
+    };
+    visit(visit, 0);
+    return best;
+}
+
+/// The variable whose directional trend explains `r` best.
+ExplainingVariable best_variable(const Eigen::VectorXd& r, const Eigen::MatrixXd& variables) {
+    ExplainingVariable out = ExplainingVariable::bar_direction;
+    double best = -1;
+    for (std::size_t v = 0; v < kExplainingVariableCount; ++v) {
+        const double r2 = explained_r2(r, variables, static_cast<ExplainingVariable>(v));
+        if (r2 > best) {
+            best = r2;
+            out = static_cast<ExplainingVariable>(v);
+        }
+    }
+    return out;
+}
+
 }  // namespace
 
 DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& options) {
@@ -150,66 +318,28 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
     out.initial_residuals = analyse_residuals(r, ctx.variables);
 
     std::vector<const Effect*> open = candidates;  // still to test
+    double alpha = options.family_alpha;
     for (int step = 0; step < options.max_steps && !open.empty(); ++step) {
         const Projection proj(ctx.gram, model_columns(ctx, fit));
-        const Eigen::VectorXd g = ctx.jac.transpose() * r;
-        const Eigen::VectorXd gm = proj.gmm_pinv * proj.model_part(g);
         const double rss = r.squaredNorm();
-        const auto p = static_cast<double>(proj.model.size());
-        const double dof = static_cast<double>(n) - p - 1.0;
-        if (dof < 1) break;
+        const StepScores sc = score_candidates(ctx, proj, r, open, out);
+        if (sc.scores.empty() || sc.sigma2 <= 0) break;
+        alpha = options.family_alpha / static_cast<double>(sc.scores.size());
+        report_confounded_groups(sc, options, out);
+        const std::vector<std::size_t> chosen = best_subset(sc, options, f_critical(alpha, sc.dof));
+        if (chosen.empty()) break;
+        // The most visible member of the best explanation goes first.
+        std::size_t first = chosen.front();
+        for (std::size_t i : chosen)
+            if (sc.scores[i].f > sc.scores[first].f) first = i;
+        const Effect* winner = sc.scores[first].effect;
+        open.erase(std::find(open.begin(), open.end(), winner));
 
-        // Score every open candidate; those the model absorbs are unidentifiable.
-        std::vector<CandidateScore> scores;
-        for (auto it = open.begin(); it != open.end();) {
-            const Eigen::Index c = column_of(ctx, (*it)->param);
-            const double pn = std::max(0.0, proj.inner(ctx.gram, c, c));
-            CandidateScore s{*it, std::sqrt(pn / std::max(ctx.gram(c, c), 1e-300)), 0, 0, 1, false};
-            if (ctx.gram(c, c) == 0 || s.independence < options.min_independence) {
-                out.unidentifiable.push_back(std::string((*it)->id));
-                // Name the model columns it is made of.
-                const Eigen::VectorXd beta = proj.gmm_pinv * proj.cross(ctx.gram, c);
-                const double big = beta.cwiseAbs().maxCoeff();
-                std::vector<std::string> group{std::string((*it)->id)};
-                for (std::size_t i = 0; i < proj.model.size(); ++i)
-                    if (big > 0 && std::abs(beta[static_cast<Eigen::Index>(i)]) >= 0.1 * big)
-                        group.push_back(column_name(ctx.columns, proj.model[i]));
-                if (group.size() > 1) add_group(out.confounded, group);
-                it = open.erase(it);
-                continue;
-            }
-            const double t = g[c] - proj.cross(ctx.gram, c).dot(gm);
-            s.delta_rss_mm2 = std::min(t * t / pn, rss);
-            s.f = s.delta_rss_mm2 / std::max((rss - s.delta_rss_mm2) / dof, 1e-300);
-            s.p_value = f_distribution_sf(s.f, 1.0, dof);
-            scores.push_back(s);
-            ++it;
-        }
-        if (scores.empty()) break;
-        const double alpha = options.family_alpha / static_cast<double>(scores.size());
-        for (auto& s : scores) s.passes = s.p_value < alpha;
-        std::sort(scores.begin(), scores.end(), [](const auto& a, const auto& b) { return a.f > b.f; });
-        if (!scores.front().passes) break;
-        const Effect* winner = scores.front().effect;
-
-        // Candidates the data cannot tell apart from the winner are reported with it.
-        const Eigen::Index w = column_of(ctx, winner->param);
-        std::vector<std::string> group{std::string(winner->id)};
-        for (const auto& s : scores) {
-            if (s.effect == winner) continue;
-            const Eigen::Index d = column_of(ctx, s.effect->param);
-            const double cosine =
-                proj.inner(ctx.gram, w, d) / std::sqrt(proj.inner(ctx.gram, w, w) * proj.inner(ctx.gram, d, d));
-            if (std::abs(cosine) > options.confound_cos) group.push_back(std::string(s.effect->id));
-        }
-        if (group.size() > 1) add_group(out.confounded, group);
-
-        // Refit with the winner; the refitted model's F statistic confirms it.
+        // Refit with the winner.
         std::vector<Param> extended = model;
         extended.push_back(winner->param);
         FitSummary refit = fit_model(readings, extended, fit.model);
         const ParamEstimate* est = refit.find(param_info(winner->param).name);
-        open.erase(std::find(open.begin(), open.end(), winner));
         if (!est || !est->observable) {
             out.unidentifiable.push_back(std::string(winner->id));
             continue;
@@ -219,35 +349,38 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
         const double dof_new = static_cast<double>(refit.degrees_of_freedom);
         DiscoveryStep st;
         st.effect = winner;
-        st.estimate = est->estimate;
+        st.estimate = st.estimate_when_added = est->estimate;
         st.std_error = est->std;
         st.rms_before_mm = std::sqrt(rss / static_cast<double>(n));
         st.rms_after_mm = std::sqrt(rss_new / static_cast<double>(n));
         st.criterion = "F";
         st.value = (rss - rss_new) / std::max(rss_new / std::max(dof_new, 1.0), 1e-300);
         st.p_value = f_distribution_sf(st.value, 1.0, dof_new);
-        if (!(st.p_value < alpha)) continue;  // the full refit does not confirm the linearised score
-        const Eigen::VectorXd closed = r - r_new;
-        double best = -1;
-        for (std::size_t v = 0; v < kExplainingVariableCount; ++v) {
-            const double r2 = explained_r2(closed, ctx.variables, static_cast<ExplainingVariable>(v));
-            if (r2 > best) {
-                best = r2;
-                st.explained_by = static_cast<ExplainingVariable>(v);
-            }
-        }
-        st.candidates = std::move(scores);
+        st.explained_by = best_variable(r - r_new, ctx.variables);
+        st.candidates = sc.scores;
+        std::sort(st.candidates.begin(), st.candidates.end(), [](const auto& a, const auto& b) { return a.f > b.f; });
         out.steps.push_back(std::move(st));
         model = std::move(extended);
         fit = std::move(refit);
         r = r_new;
     }
 
+    // Steps report the final model's estimates (an effect added early is re-estimated as later ones
+    // join it).
+    for (DiscoveryStep& st : out.steps)
+        if (const ParamEstimate* e = fit.find(param_info(st.effect->param).name); e && e->observable) {
+            st.estimate = e->estimate;
+            st.std_error = e->std;
+        }
     out.final_model = model;
     out.rms_final_mm = fit.residual_rms_mm;
     out.final_residuals = analyse_residuals(r, ctx.variables);
-    out.criterion_text = "F-test of one added parameter, family-wise false-alarm rate " +
-                         std::to_string(options.family_alpha) + " per step (Bonferroni over the candidates)";
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "F-test per added parameter at a family-wise false-alarm rate of %g per step (Bonferroni), "
+                  "sparsest explanation of up to %d effects",
+                  options.family_alpha, options.max_subset);
+    out.criterion_text = text;
     out.final_fit = std::move(fit);
     out.variables = std::move(ctx.variables);
     return out;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "ballbar/analysis/discovery.hpp"
@@ -180,6 +181,95 @@ TEST(Discovery, HiddenEffectIsNamedFirstRRTTT) {
 }
 TEST(Discovery, HiddenEffectIsNamedFirstRTTTR) {
     expect_hidden_effect_named(ba::MachineType::RTTTR, 20);
+}
+
+TEST(Discovery, TwoHiddenEffectsAreBothNamed) {
+    const std::vector<Param> pool = identifiable_effects(ba::MachineType::TTTRR);
+    int both = 0;
+    constexpr int kSeeds = 20;
+    for (int seed = 0; seed < kSeeds; ++seed) {
+        const Param a = pool[static_cast<std::size_t>(seed) % pool.size()];
+        const Param b = pool[static_cast<std::size_t>(seed * 7 + 3) % pool.size()];
+        if (a == b) continue;
+        const Param hidden[] = {a, b};
+        std::vector<double> truth;
+        const Scenario s =
+            make_scenario(ba::MachineType::TTTRR, 5000 + static_cast<std::uint64_t>(seed), hidden, &truth);
+        const ba::DiscoveryResult r = ba::discover(s.readings);
+        std::vector<Param> named;
+        for (const auto& st : r.steps) {
+            named.push_back(st.effect->param);
+            const double want = st.effect->param == a ? truth[0] : st.effect->param == b ? truth[1] : 0.0;
+            const double err = std::abs(st.estimate - want);
+            EXPECT_TRUE(err <= 3 * st.std_error || err <= 0.1 * std::abs(want))
+                << "seed " << seed << " " << st.effect->id << ": " << st.estimate << " ± " << st.std_error << ", truth "
+                << want;
+        }
+        const bool ok = std::find(named.begin(), named.end(), a) != named.end() &&
+                        std::find(named.begin(), named.end(), b) != named.end();
+        EXPECT_TRUE(ok) << "seed " << seed << ": hid " << ba::effect_for(a).id << " and " << ba::effect_for(b).id;
+        EXPECT_EQ(named.size(), 2u) << "seed " << seed;
+        EXPECT_LT(r.rms_final_mm, 1.3 * kNoise) << "seed " << seed;
+        both += ok;
+    }
+    EXPECT_GT(both, 0);
+}
+
+TEST(Discovery, NoHiddenEffectNamesNothingIn95Of100Seeds) {
+    int false_alarms = 0;
+    for (int seed = 0; seed < 100; ++seed) {
+        const Scenario s = make_scenario(ba::MachineType::TTTRR, 9000 + static_cast<std::uint64_t>(seed), {});
+        const ba::DiscoveryResult r = ba::discover(s.readings);
+        false_alarms += !r.steps.empty();
+    }
+    RecordProperty("false_alarms_per_100", false_alarms);
+    std::printf("discovery false alarms with no effect hidden: %d of 100 seeds\n", false_alarms);
+    EXPECT_LE(false_alarms, 5);
+}
+
+TEST(Discovery, LocationErrorMissingFromTheModelIsFound) {
+    // The user's model lacks X0C and B0C; the machine has both (random base errors): both are named.
+    const Scenario s = make_scenario(ba::MachineType::TTTRR, 77, {});
+    ba::DiscoveryOptions opt;
+    for (Param p : ba::rotary_params_for(ba::MachineType::TTTRR))
+        if (p != Param::X0C && p != Param::B0C) opt.base_model.push_back(p);
+    const ba::DiscoveryResult r = ba::discover(s.readings, opt);
+    std::vector<std::string> named;
+    for (const auto& st : r.steps) named.emplace_back(st.effect->id);
+    EXPECT_NE(std::find(named.begin(), named.end(), "location_X0C"), named.end());
+    EXPECT_NE(std::find(named.begin(), named.end(), "location_B0C"), named.end());
+    EXPECT_LT(r.rms_final_mm, 1.3 * kNoise);
+}
+
+TEST(Discovery, ConfoundedEffectIsReportedNotNamed) {
+    // On TTTRR the tool length offset moves the tool ball along machine Z: Z0A and the sockets' z
+    // offsets make exactly that, so the readings cannot tell them apart.
+    const Param hidden[] = {Param::tool_length};
+    const Scenario s = make_scenario(ba::MachineType::TTTRR, 3, hidden);
+    const ba::DiscoveryResult r = ba::discover(s.readings);
+    EXPECT_TRUE(r.steps.empty());
+    EXPECT_NE(std::find(r.unidentifiable.begin(), r.unidentifiable.end(), "tool_length_offset"),
+              r.unidentifiable.end());
+    bool grouped = false;
+    for (const auto& g : r.confounded)
+        grouped |= g.front() == "tool_length_offset" && std::find(g.begin(), g.end(), "Z0A") != g.end();
+    EXPECT_TRUE(grouped);
+    EXPECT_LT(r.rms_initial_mm, 1.3 * kNoise);
+}
+
+TEST(Discovery, ResidualAnalysisFindsTheVariable) {
+    const Param hidden[] = {Param::spindle_growth};
+    const Scenario s = make_scenario(ba::MachineType::TTTRR, 11, hidden);
+    const ba::DiscoveryResult r = ba::discover(s.readings);
+    EXPECT_EQ(r.initial_residuals.best, ba::ExplainingVariable::time);
+    const auto& trend = r.initial_residuals.trends[static_cast<std::size_t>(ba::ExplainingVariable::time)];
+    EXPECT_GT(trend.r2, 0.15);  // what the base model cannot absorb of a drift along Z
+    ASSERT_EQ(trend.bin_centre.size(), 8u);
+    EXPECT_TRUE(std::is_sorted(trend.bin_centre.begin(), trend.bin_centre.end()));
+    EXPECT_EQ(r.final_residuals.residual_mm.size(), static_cast<Eigen::Index>(s.readings.readings.size()));
+    ASSERT_EQ(r.steps.size(), 1u);
+    EXPECT_EQ(r.steps[0].explained_by, ba::ExplainingVariable::time);
+    EXPECT_LT(r.final_residuals.trends[static_cast<std::size_t>(ba::ExplainingVariable::time)].r2, 0.5 * trend.r2);
 }
 
 }  // namespace

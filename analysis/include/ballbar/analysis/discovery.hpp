@@ -36,6 +36,8 @@ struct DiscoveryOptions {
     /// Two candidates whose projected columns have |cos| above this are confounded with each other.
     double confound_cos = 0.98;
     int max_steps = 12;
+    /// Largest number of effects one explanation (subset search) may hold.
+    int max_subset = 3;
 };
 
 /// Per-reading variables residuals are analysed against. Columns: time_s, bar_temp_C, X_mm, Y_mm,
@@ -72,8 +74,9 @@ struct CandidateScore {
 
 struct DiscoveryStep {
     const Effect* effect = nullptr;
-    double estimate = 0;   ///< in the effect's unit
-    double std_error = 0;  ///< its standard uncertainty
+    double estimate = 0;             ///< in the effect's unit, as the final model has it
+    double estimate_when_added = 0;  ///< as the refit of its step had it
+    double std_error = 0;            ///< its standard uncertainty
     double rms_before_mm = 0, rms_after_mm = 0;
     std::string criterion;  ///< "F"
     double value = 0;       ///< F statistic of the refitted model against the previous one
