@@ -1,0 +1,251 @@
+// SPDX-License-Identifier: MIT
+#include "ballbar/report/results.hpp"
+
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "ballbar/analysis/types.hpp"
+
+namespace ballbar::report {
+
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void bad(std::string_view kind, const std::string& key, const std::string& what) {
+    throw ReportError("result \"" + std::string(kind) + "\": \"" + key + "\" " + what);
+}
+
+const json* find(const json& j, const char* key) {
+    if (!j.is_object()) return nullptr;
+    const auto it = j.find(key);
+    return it == j.end() || it->is_null() ? nullptr : &*it;
+}
+
+std::optional<double> opt_num(std::string_view kind, const json& j, const char* key) {
+    const json* v = find(j, key);
+    if (!v) return std::nullopt;
+    if (!v->is_number()) bad(kind, key, "must be a number");
+    return v->get<double>();
+}
+double num(std::string_view kind, const json& j, const char* key) {
+    const auto v = opt_num(kind, j, key);
+    if (!v) bad(kind, key, "is missing");
+    return *v;
+}
+int opt_int(std::string_view kind, const json& j, const char* key, int fallback) {
+    const json* v = find(j, key);
+    if (!v) return fallback;
+    if (!v->is_number_integer()) bad(kind, key, "must be an integer");
+    return v->get<int>();
+}
+std::string opt_str(std::string_view kind, const json& j, const char* key) {
+    const json* v = find(j, key);
+    if (!v) return {};
+    if (!v->is_string()) bad(kind, key, "must be a string");
+    return v->get<std::string>();
+}
+std::optional<Vec3> opt_vec(std::string_view kind, const json& j, const char* key) {
+    const json* v = find(j, key);
+    if (!v) return std::nullopt;
+    if (!v->is_array() || v->size() != 3 || !(*v)[0].is_number() || !(*v)[1].is_number() || !(*v)[2].is_number())
+        bad(kind, key, "must be an array of three numbers");
+    return Vec3((*v)[0].get<double>(), (*v)[1].get<double>(), (*v)[2].get<double>());
+}
+std::vector<double> nums(std::string_view kind, const json& j, const char* key) {
+    std::vector<double> out;
+    const json* v = find(j, key);
+    if (!v) return out;
+    if (!v->is_array()) bad(kind, key, "must be an array of numbers");
+    for (const auto& x : *v) {
+        if (x.is_null())
+            out.push_back(std::nan(""));
+        else if (x.is_number())
+            out.push_back(x.get<double>());
+        else
+            bad(kind, key, "must be an array of numbers");
+    }
+    return out;
+}
+
+void add_ssm(Report& r, std::string_view kind, const json& p) {
+    LocationError l;
+    const int test = opt_int(kind, p, "test", -1), step = opt_int(kind, p, "step", 0);
+    l.location = opt_int(kind, p, "location",
+                         test >= 0 && step > 0 ? test * 2 + step - 1 : static_cast<int>(r.locations.size()));
+    l.label = opt_str(kind, p, "label");
+    if (l.label.empty() && test >= 0)
+        l.label = "test " + std::to_string(test) +
+                  (step == 1   ? ", before rotation"
+                   : step == 2 ? ", after rotation"
+                               : "");
+    const auto dv = opt_vec(kind, p, "dV_mm");
+    if (!dv) bad(kind, "dV_mm", "is missing");
+    l.error_um = *dv * 1000.0;
+    if (const auto s = opt_vec(kind, p, "std_mm")) l.uncertainty_um = *s * 1000.0;
+    if (const auto d = opt_vec(kind, p, "datum_mm")) l.position_mm = *d;
+    l.points = opt_int(kind, p, "n", 0);
+    if (const auto rms = opt_num(kind, p, "residual_rms_mm")) l.residual_rms_um = *rms * 1000.0;
+    l.condition = opt_num(kind, p, "condition_number");
+    r.locations.push_back(l);
+}
+
+std::optional<double> angle_of(std::string_view kind, const json& p, const char* block, const char* key) {
+    const json* b = find(p, block);
+    return b ? opt_num(kind, *b, key) : std::nullopt;
+}
+
+void add_orientation(Report& r, std::string_view kind, const json& p) {
+    const auto type = r.header.machine.type;
+    const std::string test_kind = opt_str(kind, p, "kind");
+    const int test = opt_int(kind, p, "test", -1);
+    struct Angle {
+        const char* symbol;
+        const char* axis;
+        const char* key;
+        const char* commanded;
+    };
+    std::vector<Angle> angles;
+    const Angle alpha{"Δα", "A", "d_alpha_rad", "alpha_rad"}, beta{"Δβ", "B", "d_beta_rad", "beta_rad"},
+        gamma{"Δγ", "C", "d_gamma_rad", "gamma_rad"};
+    if (type == analysis::MachineType::RRTTT)
+        angles = {alpha, beta};
+    else if (type == analysis::MachineType::TTTRR)
+        angles = {alpha, gamma};
+    else if (test_kind == "SpindleBeta")
+        angles = {beta};
+    else if (test_kind == "TableAlpha")
+        angles = {alpha};
+    else
+        angles = {alpha, beta};
+    for (const auto& a : angles) {
+        OrientationError o;
+        o.symbol = a.symbol;
+        o.axis = a.axis;
+        o.first_order_rad = angle_of(kind, p, "first_order", a.key);
+        o.exact_rad = angle_of(kind, p, "exact", a.key);
+        o.uncertainty_rad = angle_of(kind, p, "std", a.key);
+        o.commanded_rad = opt_num(kind, p, a.commanded);
+        if (test >= 0) o.from_location = test * 2, o.to_location = test * 2 + 1;
+        o.from_location = opt_int(kind, p, "from_location", o.from_location);
+        o.to_location = opt_int(kind, p, "to_location", o.to_location);
+        r.orientation.push_back(o);
+    }
+}
+
+/// Internal units of the analysis (mm, rad, …) to the units the report shows, and the factor.
+std::pair<double, std::string> display_unit(const std::string& unit) {
+    if (unit == "mm") return {1000.0, "µm"};
+    if (unit == "rad") return {analysis::rad_to_arcsec(1.0), "arcsec"};
+    if (unit == "mm/mm" || unit == "mm_per_mm") return {1e6, "µm/m"};
+    if (unit == "mm/h" || unit == "mm_per_h") return {1000.0, "µm/h"};
+    if (unit == "1/K" || unit == "per_K") return {1e6, "ppm/K"};
+    return {1.0, unit};
+}
+
+void add_identification(Report& r, std::string_view kind, const json& p) {
+    IdentifiedModel m;
+    m.name = opt_str(kind, p, "name");
+    if (const json* c = find(p, "converged")) m.converged = c->is_boolean() ? c->get<bool>() : false;
+    if (find(p, "iterations")) m.iterations = opt_int(kind, p, "iterations", 0);
+    if (const auto v = opt_num(kind, p, "initial_rms_mm")) m.residual_rms_before_um = *v * 1000;
+    if (const auto v = opt_num(kind, p, "residual_rms_mm")) m.residual_rms_after_um = *v * 1000;
+    m.condition = opt_num(kind, p, "condition");
+    const json* est = find(p, "estimates");
+    if (est && !est->is_array()) bad(kind, "estimates", "must be an array");
+    if (est)
+        for (const auto& e : *est) {
+            ModelParameter mp;
+            mp.name = opt_str(kind, e, "name");
+            const auto [factor, unit] = display_unit(opt_str(kind, e, "unit"));
+            mp.unit = unit;
+            mp.value = num(kind, e, find(e, "estimate") ? "estimate" : "value") * factor;
+            if (const auto u = opt_num(kind, e, "std")) mp.uncertainty = *u * factor;
+            mp.observability = opt_num(kind, e, "independence");
+            mp.note = opt_str(kind, e, "note");
+            if (const json* o = find(e, "observable"); o && o->is_boolean() && !o->get<bool>() && mp.note.empty())
+                mp.note = "not observable: held fixed";
+            m.parameters.push_back(mp);
+        }
+    r.model = m;
+}
+
+void add_discovery(Report& r, std::string_view kind, const json& p) {
+    const json* steps = find(p, "steps");
+    if (!steps || !steps->is_array()) bad(kind, "steps", "must be an array");
+    for (const auto& s : *steps) {
+        DiscoveryStep d;
+        d.effect = opt_str(kind, s, "effect");
+        d.variable = opt_str(kind, s, "variable");
+        d.variable_unit = opt_str(kind, s, "variable_unit");
+        d.x = nums(kind, s, "x");
+        for (double v : nums(kind, s, "before_mm")) d.before_um.push_back(v * 1000);
+        for (double v : nums(kind, s, "after_mm")) d.after_um.push_back(v * 1000);
+        if (d.before_um.size() != d.x.size() || d.after_um.size() != d.x.size())
+            bad(kind, "x", "must have as many values as before_mm and after_mm");
+        if (const auto v = opt_num(kind, s, "rms_before_mm")) d.rms_before_um = *v * 1000;
+        if (const auto v = opt_num(kind, s, "rms_after_mm")) d.rms_after_um = *v * 1000;
+        if (const json* a = find(s, "accepted"); a && a->is_boolean()) d.accepted = a->get<bool>();
+        d.note = opt_str(kind, s, "note");
+        r.discovery.push_back(d);
+    }
+}
+
+void add_compensation(Report& r, std::string_view kind, const json& p) {
+    r.compensation_metric = opt_str(kind, p, "metric");
+    const json* axes = find(p, "axes");
+    if (!axes || !axes->is_array()) bad(kind, "axes", "must be an array");
+    for (const auto& a : *axes)
+        r.compensation.push_back(
+            {opt_str(kind, a, "axis"), opt_str(kind, a, "unit"), num(kind, a, "before"), num(kind, a, "after")});
+}
+
+void add_procedure(Report& r, std::string_view kind, const json& p) {
+    ProcedureEvent e;
+    e.time_s = opt_num(kind, p, "time_s").value_or(0);
+    e.timestamp = opt_str(kind, p, "at");
+    const std::string event = opt_str(kind, p, "event");
+    e.step = opt_str(kind, p, "to");
+    e.detail = opt_str(kind, p, "detail");
+    e.kind = event == "PointRejected" ? "repeat"
+             : event == "DeviceLost"  ? "pause"
+             : event == "DeviceBack"  ? "resume"
+             : event == "Abort"       ? "abort"
+             : event == "Fail"        ? "fail"
+             : event == "Accepted"    ? "finish"
+                                      : "step";
+    if (e.detail.empty()) e.detail = event;
+    r.procedure.push_back(e);
+}
+
+}  // namespace
+
+bool is_known_result_kind(std::string_view kind) {
+    return kind == "ssm" || kind == "orientation" || kind == "identification" || kind == "discovery" ||
+           kind == "compensation" || kind == "procedure";
+}
+
+bool add_result(Report& report, std::string_view kind, const nlohmann::json& payload) {
+    if (!payload.is_object()) {
+        if (is_known_result_kind(kind)) throw ReportError("result \"" + std::string(kind) + "\": not a JSON object");
+        return false;
+    }
+    if (kind == "ssm")
+        add_ssm(report, kind, payload);
+    else if (kind == "orientation")
+        add_orientation(report, kind, payload);
+    else if (kind == "identification")
+        add_identification(report, kind, payload);
+    else if (kind == "discovery")
+        add_discovery(report, kind, payload);
+    else if (kind == "compensation")
+        add_compensation(report, kind, payload);
+    else if (kind == "procedure")
+        add_procedure(report, kind, payload);
+    else
+        return false;
+    return true;
+}
+
+}  // namespace ballbar::report

@@ -1,0 +1,178 @@
+// SPDX-License-Identifier: MIT
+// build_report: one pass over the session's samples (bar-reading figure, bar temperatures, capture
+// window times), then points, audit trail and stored results.
+#include "ballbar/report/build.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "ballbar/report/decimate.hpp"
+#include "ballbar/report/results.hpp"
+
+namespace ballbar::report {
+
+namespace {
+
+/// Seconds since the epoch of an ISO 8601 UTC time "YYYY-MM-DDTHH:MM:SS[.fff][Z]"; NaN if not one.
+double parse_iso8601(const std::string& s) {
+    std::tm tm{};
+    int consumed = 0;
+    if (std::sscanf(s.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour,
+                    &tm.tm_min, &tm.tm_sec, &consumed) != 6)
+        return std::nan("");
+    tm.tm_year -= 1900;
+    tm.tm_mon -= 1;
+    double frac = 0;
+    if (static_cast<std::size_t>(consumed) < s.size() && s[static_cast<std::size_t>(consumed)] == '.')
+        frac = std::atof(("0" + s.substr(static_cast<std::size_t>(consumed))).c_str());
+    return static_cast<double>(timegm(&tm)) + frac;
+}
+
+void add_temperature(Range& r, double v, double& sum, std::size_t& n) {
+    if (!std::isfinite(v)) return;
+    r.min = std::min(r.min.value_or(v), v);
+    r.max = std::max(r.max.value_or(v), v);
+    sum += v;
+    ++n;
+    r.mean = sum / static_cast<double>(n);
+}
+
+std::string procedure_kind(const storage::Transition& t) {
+    using storage::SessionState;
+    if (t.to == SessionState::interrupted) return "pause";
+    if (t.from == SessionState::interrupted && t.to == SessionState::running) return "resume";
+    if (t.to == SessionState::aborted) return "abort";
+    if (t.to == SessionState::failed) return "fail";
+    if (t.to == SessionState::completed) return "finish";
+    return "step";
+}
+
+}  // namespace
+
+Report build_report(storage::Store& store, std::int64_t session_id, const BuildOptions& options) {
+    const storage::SessionInfo info = store.session(session_id);
+    Report r;
+    Header& h = r.header;
+    h.session_id = info.id;
+    h.session_name = info.procedure.empty() ? info.uuid.substr(0, 8) : info.procedure + " " + info.uuid.substr(0, 8);
+    h.status = std::string(storage::to_string(info.state));
+    h.started_at = info.started_at;
+    h.finished_at = info.ended_at.value_or("");
+    h.machine = info.machine;
+    if (info.instrument) {
+        h.instrument_model = info.instrument->model;
+        h.instrument_serial = info.instrument->serial;
+        h.instrument_calibration_date = info.instrument->calibration_date;
+        h.calibrated_length_mm = info.instrument->calibrated_length_mm;
+    }
+    h.operator_name = info.operator_name;
+    h.notes = info.notes;
+    h.software_version = options.software_version;
+    const double t0_wall = parse_iso8601(info.started_at);
+
+    // Points: the capture windows need the times of their first and last samples.
+    const std::vector<storage::PointRecord> points = store.points(session_id);
+    std::vector<std::uint64_t> wanted;
+    for (const auto& p : points) {
+        if (p.first_seq) wanted.push_back(*p.first_seq);
+        if (p.last_seq) wanted.push_back(*p.last_seq);
+    }
+    std::sort(wanted.begin(), wanted.end());
+    wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
+    std::vector<double> wanted_time(wanted.size(), std::nan(""));
+
+    // Samples, in one pass: the time span comes from the first and the last sample.
+    const std::uint64_t count = store.next_seq(session_id);
+    double sum_bar = 0, sum_machine = 0, sum_air = 0;
+    std::size_t n_bar = 0, n_machine = 0, n_air = 0;
+    if (count > 0) {
+        const auto first = store.samples(session_id, 0, 1);
+        const auto last = store.samples(session_id, count - 1, 1);
+        if (!first.empty() && !last.empty()) {
+            const std::uint64_t t0_us = first.front().device_time_us;
+            const double span_s = static_cast<double>(last.front().device_time_us - t0_us) * 1e-6;
+            MinMaxDecimator dec(0, std::max(span_s, 1e-6), std::max<std::size_t>(1, options.trace_columns));
+            double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+            std::size_t next_wanted = 0;
+            store.for_each_sample(session_id, [&](const analysis::BarSample& s) {
+                const double t = static_cast<double>(s.device_time_us - t0_us) * 1e-6;
+                const double um = s.displacement_nm * 1e-3;
+                dec.add(t, um);
+                lo = std::min(lo, um);
+                hi = std::max(hi, um);
+                if (!(s.flags & analysis::kSampleTempInvalid))
+                    add_temperature(h.bar_temp_C, s.bar_temp_C, sum_bar, n_bar);
+                while (next_wanted < wanted.size() && wanted[next_wanted] < s.seq) ++next_wanted;
+                if (next_wanted < wanted.size() && wanted[next_wanted] == s.seq) wanted_time[next_wanted++] = t;
+            });
+            r.trace.samples = dec.seen();
+            XYSeries kept = dec.take();
+            r.trace.time_s = std::move(kept.x);
+            r.trace.displacement_um = std::move(kept.y);
+            if (r.trace.samples > 0) r.trace.min_um = lo, r.trace.max_um = hi;
+        }
+    }
+    auto time_of = [&](std::uint64_t seq) {
+        const auto it = std::lower_bound(wanted.begin(), wanted.end(), seq);
+        return it != wanted.end() && *it == seq ? wanted_time[static_cast<std::size_t>(it - wanted.begin())]
+                                                : std::nan("");
+    };
+    for (const auto& p : points) {
+        const auto& rd = p.reading;
+        if (n_bar == 0 && rd.bar_temp_C) add_temperature(h.bar_temp_C, *rd.bar_temp_C, sum_bar, n_bar);
+        if (rd.machine_temp_C) add_temperature(h.machine_temp_C, *rd.machine_temp_C, sum_machine, n_machine);
+        if (rd.air_temp_C) add_temperature(h.air_temp_C, *rd.air_temp_C, sum_air, n_air);
+        CaptureWindow c;
+        c.location = rd.location;
+        c.point = rd.point;
+        c.mean_um = (rd.measured_mm - p.nominal_mm) * 1000.0;
+        if (p.first_seq && p.last_seq) {
+            c.start_s = time_of(*p.first_seq);
+            c.end_s = time_of(*p.last_seq);
+        }
+        if (!std::isfinite(c.start_s) || !std::isfinite(c.end_s)) {  // imported readings: no samples behind them
+            const double half = rd.n > 0 ? rd.n * 5e-4 : 0.25;
+            c.start_s = rd.time_s - half;
+            c.end_s = rd.time_s + half;
+        }
+        r.captures.push_back(c);
+    }
+
+    // The audit trail of the session, then the stored results in the order they were added.
+    for (const auto& t : store.transitions(session_id)) {
+        ProcedureEvent e;
+        e.timestamp = t.at;
+        const double wall = parse_iso8601(t.at);
+        e.time_s = std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0;
+        e.kind = procedure_kind(t);
+        e.step = std::string(storage::to_string(t.to));
+        e.detail = t.event;
+        r.procedure.push_back(e);
+    }
+    for (const auto& res : store.results(session_id)) {
+        nlohmann::json payload;
+        try {
+            payload = nlohmann::json::parse(res.payload_json);
+        } catch (const nlohmann::json::parse_error& e) {
+            throw ReportError("result " + std::to_string(res.id) + " (" + res.kind +
+                              "): payload is not JSON: " + e.what());
+        }
+        try {
+            add_result(r, res.kind, payload);
+        } catch (const ReportError& e) {
+            throw ReportError("result " + std::to_string(res.id) + ": " + e.what());
+        }
+    }
+    std::stable_sort(r.procedure.begin(), r.procedure.end(),
+                     [](const ProcedureEvent& a, const ProcedureEvent& b) { return a.time_s < b.time_s; });
+    std::stable_sort(r.locations.begin(), r.locations.end(),
+                     [](const LocationError& a, const LocationError& b) { return a.location < b.location; });
+    return r;
+}
+
+}  // namespace ballbar::report
