@@ -40,8 +40,10 @@ struct FitOptions {
     /// Below this RMS sensitivity (mm per unit of the parameter) a parameter has no effect on these
     /// readings at all (e.g. spindle growth when every reading has time 0).
     double min_sensitivity = 1e-12;
-    /// Converged when the largest scaled step is below this (relative to the parameter's std).
-    double step_tolerance = 1e-6;
+    /// Converged when a step changes the predicted readings by less than this fraction of the reading
+    /// noise (root-sum-square over readings of the change ≤ step_tolerance · σ): parameter steps of
+    /// about this fraction of their standard uncertainty or less.
+    double step_tolerance = 1e-2;
 
     /// Empty when valid, else what is wrong (a Param listed twice, limits out of range).
     std::string validate() const;
@@ -70,6 +72,7 @@ struct ParamEstimate {
 struct FitSummary {
     bool converged = false;
     int iterations = 0;
+    int jacobian_evaluations = 0;
     std::string message;  ///< why the iteration stopped
     /// Free parameters in the caller's order, then socket offsets (socket 0 x, y, z, socket 1 ...).
     std::vector<ParamEstimate> estimates;
