@@ -1,0 +1,165 @@
+// SPDX-License-Identifier: MIT
+// `ballbar monitor --device URI [--seconds N] [--json]`: connect, identify, stream and show the live
+// reading, sample rate, lost frames and bar temperature; with --json a summary at the end.
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <vector>
+
+#include "ballbar/device/instrument.hpp"
+#include "ballbar/device/uri.hpp"
+#include "command.hpp"
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+
+extern "C" void on_interrupt(int) {
+    g_interrupted.store(true);
+}
+
+struct MonitorOptions {
+    std::string device;
+    double seconds = 0;  ///< 0: until Ctrl-C
+    bool json = false;
+    std::optional<int> rate_hz;
+    std::optional<int> averaging;
+};
+
+struct Summary {
+    std::uint64_t n = 0;
+    double mean = 0, m2 = 0;  // Welford, of the length in mm
+    std::uint64_t first_us = 0, last_us = 0;
+    float temp_C = 0;
+    void add(const ballbar::analysis::BarSample& s, double length_mm) {
+        if (n == 0) first_us = s.device_time_us;
+        last_us = s.device_time_us;
+        temp_C = s.bar_temp_C;
+        ++n;
+        const double d = length_mm - mean;
+        mean += d / static_cast<double>(n);
+        m2 += d * (length_mm - mean);
+    }
+    double std_mm() const { return n > 1 ? std::sqrt(m2 / static_cast<double>(n - 1)) : 0.0; }
+    double rate_hz() const {
+        return n > 1 && last_us > first_us ? static_cast<double>(n - 1) * 1e6 / static_cast<double>(last_us - first_us)
+                                           : 0.0;
+    }
+};
+
+int run_monitor(const MonitorOptions& o) {
+    using namespace ballbar;
+    using app::CliError;
+    using namespace std::chrono;
+    struct sigaction sa {};
+    sa.sa_handler = on_interrupt;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    std::signal(SIGPIPE, SIG_IGN);
+
+    std::unique_ptr<device::Instrument> inst;
+    try {
+        inst = std::make_unique<device::Instrument>(device::open_transport(o.device));
+    } catch (const std::invalid_argument& e) {
+        throw CliError(app::kExitUsage, e.what());
+    }
+    Summary sum;
+    device::InstrumentInfo info;
+    bool disconnected = false;
+    std::string failure;
+    try {
+        info = inst->identify();
+        if (!o.json) {
+            std::cout << info.model << " serial " << info.serial << ", firmware " << info.firmware << ", protocol "
+                      << info.protocol_version << ", bar " << info.calibrated_length_mm << " mm, resolution "
+                      << info.resolution_um << " µm, range ±" << info.range_mm << " mm  (" << inst->transport().uri()
+                      << ")\n";
+        }
+        const auto st = inst->status();
+        if (st.streaming) inst->stop_streaming();  // a previous host left it streaming
+        if (o.rate_hz || o.averaging) {
+            inst->configure(o.rate_hz.value_or(st.sample_rate_hz), o.averaging.value_or(st.averaging));
+        }
+        inst->start_streaming();
+        std::vector<analysis::BarSample> buf(8192);
+        const auto start = steady_clock::now();
+        auto next_show = start + milliseconds(500);
+        const bool tty = ::isatty(STDOUT_FILENO);
+        while (!g_interrupted.load()) {
+            const auto now = steady_clock::now();
+            if (o.seconds > 0 && now - start >= duration<double>(o.seconds)) break;
+            inst->poll(milliseconds(20));
+            std::size_t n;
+            while ((n = inst->read_samples(buf)) > 0) {
+                for (std::size_t i = 0; i < n; ++i) sum.add(buf[i], buf[i].length_mm(info.calibrated_length_mm));
+                if (!o.json && now >= next_show) {
+                    const auto& last = buf[n - 1];
+                    char line[200];
+                    std::snprintf(line, sizeof line,
+                                  "%10.5f mm  (%+9.2f µm)%s  %7.1f Hz  lost frames %llu  bar %.2f °C",
+                                  last.length_mm(info.calibrated_length_mm), last.displacement_nm * 1e-3,
+                                  (last.flags & analysis::kSampleOutOfRange) ? " OUT OF RANGE" : "", sum.rate_hz(),
+                                  static_cast<unsigned long long>(inst->stats().lost_frames), last.bar_temp_C);
+                    std::cout << (tty ? "\r" : "") << line << (tty ? "" : "\n") << std::flush;
+                    next_show = now + milliseconds(500);
+                }
+            }
+        }
+        inst->stop_streaming();
+        // Samples that arrived before StopReply.
+        std::size_t n;
+        while ((n = inst->read_samples(buf)) > 0) {
+            for (std::size_t i = 0; i < n; ++i) sum.add(buf[i], buf[i].length_mm(info.calibrated_length_mm));
+        }
+        if (!o.json && tty) std::cout << '\n';
+    } catch (const device::DeviceError& e) {
+        disconnected = e.kind() == device::DeviceErrorKind::Disconnected;
+        failure = e.what();
+    }
+    const auto& st = inst->stats();
+    if (o.json) {
+        nlohmann::json j{{"samples", sum.n},
+                         {"lost_frames", st.lost_frames},
+                         {"rate_hz", sum.rate_hz()},
+                         {"mean_mm", sum.mean},
+                         {"std_mm", sum.std_mm()},
+                         {"bar_temp_C", sum.temp_C},
+                         {"invalid_frames", st.invalid_frames},
+                         {"queue_drops", st.queue_drops},
+                         {"model", info.model},
+                         {"serial", info.serial},
+                         {"device", o.device}};
+        if (!failure.empty()) j["error"] = failure;
+        std::cout << j.dump() << '\n';
+    } else {
+        std::cout << sum.n << " samples, " << st.lost_frames << " lost frames, " << sum.rate_hz() << " Hz, mean "
+                  << sum.mean << " mm, std " << sum.std_mm() * 1e3 << " µm\n";
+    }
+    if (!failure.empty()) {
+        throw CliError(app::kExitFailure, disconnected ? "instrument disconnected: " + failure : failure);
+    }
+    return g_interrupted.load() ? app::kExitInterrupted : app::kExitOk;
+}
+
+}  // namespace
+
+BALLBAR_COMMAND(monitor) {
+    auto* sub = root.add_subcommand("monitor", "Connect to an instrument and show its live reading");
+    auto o = std::make_shared<MonitorOptions>();
+    sub->add_option("--device", o->device,
+                    "emulator:[CONFIG], serial:PATH, tcp:HOST:PORT, usb:VID:PID[:SERIAL], hid:VID:PID[:SERIAL]")
+        ->required();
+    sub->add_option("--seconds", o->seconds, "Stream this long, then print the summary (default: until Ctrl-C)")
+        ->check(CLI::NonNegativeNumber);
+    sub->add_flag("--json", o->json, "Print only a JSON summary at the end");
+    sub->add_option("--rate", o->rate_hz, "Sample rate to configure, Hz")->check(CLI::Range(1, 5000));
+    sub->add_option("--averaging", o->averaging, "Readings averaged per sample")->check(CLI::Range(1, 64));
+    sub->callback([&globals, o] { globals.action = [o]() -> int { return run_monitor(*o); }; });
+}
