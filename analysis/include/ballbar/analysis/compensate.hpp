@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: MIT
+// Compensation of a commanded pose through the inverse Jacobian, for the three seed machine types
+// with an identified error model (docs/compensation.md).
+//
+// The tool pose that matters is the tool relative to the workpiece: the tool-ball centre and the tool
+// axis expressed in the table frame (the frame of the readings' socket coordinates). For a commanded
+// pose u the intended tool pose is the nominal one, v_nom(u); the machine delivers v_act(u). The
+// correction du makes v_act(u + du) = v_nom(u):
+//  - first order (Lei & Hsu's method): du = J⁺ (v_nom(u) − v_act(u)) with J the nominal Jacobian at u,
+//    the rotary part by least squares over the three direction components (singular only where a
+//    rotary axis is parallel to the tool axis, the true singularity);
+//  - exact: Newton iteration on the same equations until the position matches to `tolerance_mm`.
+// Near a singularity (|sin| of the angle between a rotary axis and the tool axis below
+// `singular_tolerance`) that axis is not corrected (seed-math.md: no C correction at A = 0) and the
+// position is still matched exactly by the linear axes.
+#pragma once
+
+#include <array>
+
+#include "ballbar/analysis/error_params.hpp"
+#include "ballbar/analysis/types.hpp"
+
+namespace ballbar::analysis {
+
+/// Tool-ball centre (mm) and unit tool axis (pointing from the ball into the spindle) in the table frame.
+struct ToolPose {
+    Vec3 position_mm = Vec3::Zero();
+    Vec3 direction = Vec3::UnitZ();
+};
+
+/// The actual kinematics of one machine with fixed error parameters, precomputed for fast evaluation
+/// (the same model as kinematics.hpp's actual_tool_ball/actual_table_ball, time 0: no spindle growth).
+class MachineModel {
+  public:
+    MachineModel(const MachineGeometry& geom, const ErrorParams& e);
+
+    ToolPose tool_pose(const Pose& pose) const;
+    const MachineGeometry& geometry() const { return geom_; }
+
+  private:
+    struct Axis {  // rotation about a fixed line: x ↦ point + R(θ + zero)(x − point)
+        Vec3 point = Vec3::Zero();
+        Vec3 dir = Vec3::UnitZ();
+        Mat3 cross = Mat3::Zero();  // [dir]×
+        Mat3 outer = Mat3::Zero();  // dir·dirᵀ
+        double cos_zero = 1, sin_zero = 0;
+        Mat3 rotation(double angle_rad) const;
+    };
+    MachineGeometry geom_;
+    ErrorParams e_;
+    Axis first_, second_;  // the type's rotary axes, in the order of rotary_axes(type)
+    Vec3 tool_mm_ = Vec3::Zero();
+};
+
+struct CompensationOptions {
+    /// Below this |sin(angle between a rotary axis and the tool axis)| the axis is not corrected.
+    double singular_tolerance = 1e-3;
+    int max_iterations = 20;       ///< exact solution
+    double tolerance_mm = 1e-12;   ///< exact solution: position match
+    double tolerance_rad = 1e-14;  ///< exact solution: direction match (non-singular poses)
+};
+
+struct Correction {
+    Pose commanded;                  ///< u + du
+    std::array<double, 5> du{};      ///< X, Y, Z (mm), first and second rotary axis (rad)
+    bool singular = false;           ///< a rotary axis was left uncorrected
+    int suppressed_axis = -1;        ///< 3 (first rotary) or 4 (second rotary) when singular
+    bool converged = true;           ///< exact solution reached its tolerances
+    int iterations = 0;              ///< exact solution
+    double position_error_mm = 0;    ///< |position_act(u + du) − position_nom(u)| after correction
+    double direction_error_rad = 0;  ///< angle between the corrected and intended tool axes
+};
+
+class Compensator {
+  public:
+    Compensator(const MachineGeometry& geom, const ErrorParams& e, CompensationOptions options = {});
+
+    /// First-order correction (one model evaluation, nominal Jacobian). Errors are not evaluated
+    /// after the correction (position_error_mm, direction_error_rad = 0) to keep it cheap.
+    Correction first_order(const Pose& u) const;
+    /// Exact correction by Newton iteration.
+    Correction exact(const Pose& u) const;
+
+    ToolPose nominal(const Pose& u) const { return nominal_.tool_pose(u); }
+    ToolPose actual(const Pose& u) const { return actual_.tool_pose(u); }
+    const CompensationOptions& options() const { return options_; }
+
+  private:
+    // One linearised step: du from the pose error dv (intended − actual) at u; `suppress` forced axis.
+    std::array<double, 5> step(const Pose& u, const Vec3& dw, const Vec3& dq, int& suppressed) const;
+
+    MachineModel nominal_, actual_;
+    CompensationOptions options_;
+};
+
+/// The pose u with du added (rotary increments to the type's two rotary axes).
+Pose add_correction(MachineType type, const Pose& u, const std::array<double, 5>& du);
+
+}  // namespace ballbar::analysis
