@@ -1,0 +1,329 @@
+// SPDX-License-Identifier: MIT
+#include "acquisition_adapters.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "ballbar/acquisition/nc_writer.hpp"
+
+namespace ballbar::app {
+
+using acquisition::ReadStatus;
+using acquisition::SourceError;
+using nlohmann::json;
+namespace acq = ballbar::acquisition;
+
+// ---- DeviceSource ----------------------------------------------------------------------------------
+
+DeviceSource::DeviceSource(Opener open, int sample_rate_hz) : open_(std::move(open)), rate_hz_(sample_rate_hz) {}
+
+acq::InstrumentStatus DeviceSource::open_and_identify() {
+    inst_ = std::make_unique<device::Instrument>(open_());
+    info_ = inst_->identify();
+    const device::InstrumentStatus st = inst_->status();
+    acq::InstrumentStatus s;
+    s.description =
+        info_->model + " " + info_->serial + " (firmware " + info_->firmware + ") on " + inst_->transport().uri();
+    s.battery_pct = st.battery_pct;
+    if (!(st.error_flags & device::protocol::kStatusTempSensorFault)) s.bar_temp_C = st.bar_temp_C;
+    s.referenced = st.referenced;
+    s.calibrated_length_mm = info_->calibrated_length_mm;
+    s.sample_rate_hz = rate_hz_;
+    return s;
+}
+
+acq::InstrumentStatus DeviceSource::connect() {
+    try {
+        acq::InstrumentStatus s = open_and_identify();
+        inst_->configure(rate_hz_, 1);
+        return s;
+    } catch (const device::DeviceError& e) {
+        throw SourceError(e.what());
+    }
+}
+
+void DeviceSource::set_reference() {
+    try {
+        inst_->set_reference();
+    } catch (const device::DeviceError& e) {
+        throw SourceError(e.what());
+    }
+}
+
+void DeviceSource::start() {
+    try {
+        inst_->start_streaming();
+    } catch (const device::DeviceError& e) {
+        throw SourceError(e.what());
+    }
+}
+
+ReadStatus DeviceSource::read(std::span<analysis::BarSample> out, std::size_t& n, std::chrono::milliseconds timeout) {
+    n = 0;
+    if (!inst_) return ReadStatus::Disconnected;
+    try {
+        if (inst_->queue().size() == 0) inst_->poll(timeout);
+        n = inst_->read_samples(out);
+    } catch (const device::DeviceError& e) {
+        if (e.kind() == device::DeviceErrorKind::Disconnected) {
+            lost_frames_ += inst_->stats().lost_frames;
+            inst_.reset();
+            return ReadStatus::Disconnected;
+        }
+        if (e.kind() == device::DeviceErrorKind::Timeout) return ReadStatus::Timeout;
+        throw SourceError(e.what());
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        analysis::BarSample& s = out[i];
+        if (s.flags & device::kSampleAfterGap) ++next_seq_;  // leave the hole visible
+        s.flags = static_cast<std::uint16_t>(s.flags & ~device::kSampleAfterGap);
+        s.seq = next_seq_++;
+    }
+    return n > 0 ? ReadStatus::Ok : ReadStatus::Timeout;
+}
+
+bool DeviceSource::reconnect(std::chrono::milliseconds timeout) {
+    try {
+        inst_.reset();
+        const acq::InstrumentStatus s = open_and_identify();
+        (void)s;
+        inst_->configure(rate_hz_, 1);
+        inst_->start_streaming();
+        return true;
+    } catch (const device::DeviceError& e) {
+        inst_.reset();
+        if (e.kind() == device::DeviceErrorKind::Permission) throw SourceError(e.what());
+        std::this_thread::sleep_for(timeout);
+        return false;
+    } catch (const std::invalid_argument&) {
+        std::this_thread::sleep_for(timeout);
+        return false;
+    }
+}
+
+// ---- results as JSON -------------------------------------------------------------------------------
+
+namespace {
+
+json vec(const analysis::Vec3& v) {
+    return json::array({v.x(), v.y(), v.z()});
+}
+
+}  // namespace
+
+std::string location_json(const acq::LocationResult& r) {
+    json j;
+    j["test"] = r.test;
+    j["step"] = r.step;
+    j["datum_mm"] = vec(r.datum_mm);
+    j["e_exact_mm"] = vec(r.ssm.exact_mm);
+    j["e_linear_mm"] = vec(r.ssm.linear_mm);
+    j["e_std_mm"] = vec(r.ssm.std_mm);
+    j["dV_mm"] = vec(r.dV_mm);
+    j["condition_number"] = r.ssm.condition_number;
+    j["n"] = r.ssm.n;
+    return j.dump();
+}
+
+std::string test_json(const acq::TestResult& r) {
+    json j;
+    j["test"] = r.test;
+    j["kind"] = std::string(acq::to_string(r.kind));
+    j["dV1_mm"] = vec(r.dV1_mm);
+    j["dV2_mm"] = vec(r.dV2_mm);
+    auto ang = [](const std::optional<analysis::OrientationErrors>& e) -> json {
+        if (!e) return nullptr;
+        return {{"d_alpha_rad", e->d_alpha_rad}, {"d_beta_rad", e->d_beta_rad}, {"d_gamma_rad", e->d_gamma_rad}};
+    };
+    j["first_order"] = ang(r.orientation.first_order);
+    j["exact"] = ang(r.orientation.exact);
+    if (!r.orientation.singular.empty()) j["singular"] = r.orientation.singular;
+    return j.dump();
+}
+
+// ---- StoreSink -------------------------------------------------------------------------------------
+
+StoreSink::StoreSink(storage::Store& store, std::int64_t session_id, const acq::Plan& plan)
+    : store_(store), id_(session_id), plan_(plan), writer_(store, session_id) {}
+
+void StoreSink::on_transition(const acq::TransitionRecord& t) {
+    json j = {{"from", std::string(acq::to_string(t.from))},
+              {"to", std::string(acq::to_string(t.to))},
+              {"event", std::string(acq::to_string(t.event))},
+              {"detail", t.detail}};
+    store_.add_result(id_, "acquisition.transition", j.dump(), std::nullopt, "ballbar acquisition/1");
+}
+
+void StoreSink::on_samples(std::span<const analysis::BarSample> samples) {
+    for (const auto& s : samples) writer_.append(s);
+}
+
+void StoreSink::on_point(const acq::CapturedPoint& p) {
+    writer_.flush();  // the point's window is stored before the point
+    storage::PointRecord r;
+    r.reading.pose = p.planned.pose;
+    r.reading.socket_mm = p.planned.socket_mm;
+    r.reading.measured_mm = p.measured_mm;
+    r.reading.time_s = p.time_s;
+    r.reading.bar_temp_C = p.bar_temp_C;
+    r.reading.location = 2 * p.planned.test + (p.planned.step - 1);
+    r.reading.point = p.planned.point;
+    r.reading.step = p.planned.step;
+    r.reading.n = static_cast<int>(p.n);
+    r.reading.std_mm = p.std_mm;
+    r.nominal_mm = p.planned.nominal_mm;
+    r.first_seq = p.first_seq;
+    r.last_seq = p.last_seq;
+    store_.add_point(id_, r);
+}
+
+void StoreSink::on_location(const acq::LocationResult& r) {
+    store_.add_result(id_, "ssm", location_json(r), std::nullopt, "ballbar acquisition/1");
+}
+
+void StoreSink::on_test(const acq::TestResult& r) {
+    store_.add_result(id_, "orientation", test_json(r), std::nullopt, "ballbar acquisition/1");
+}
+
+void StoreSink::finish(acq::State final_state, const std::string& reason) {
+    writer_.flush();
+    switch (final_state) {
+        case acq::State::Done:
+            store_.finish_session(id_);
+            break;
+        case acq::State::Aborted:
+            store_.abort_session(id_, reason.empty() ? "abort" : "abort: " + reason);
+            break;
+        default:
+            store_.fail_session(id_, "fail: " + reason);
+            break;
+    }
+}
+
+void store_plan(storage::Store& store, std::int64_t session_id, const acq::Plan& plan) {
+    json j;
+    j["machine"] = json::parse(acq::write_machine_file(plan.machine));
+    j["plan"] = json::parse(acq::write_plan_file(plan.spec, plan.machine.geometry.type));
+    store.add_result(session_id, "acquisition.plan", j.dump(), std::nullopt, "ballbar acquisition/1");
+}
+
+acq::Plan load_plan(storage::Store& store, std::int64_t session_id) {
+    for (const auto& r : store.results(session_id)) {
+        if (r.kind != "acquisition.plan") continue;
+        const json j = json::parse(r.payload_json);
+        const acq::MachineFile m = acq::parse_machine_file(j.at("machine").dump());
+        return acq::make_plan(m, acq::parse_plan_file(j.at("plan").dump(), m.geometry.type));
+    }
+    throw acq::PlanError("session " + std::to_string(session_id) +
+                         " has no stored plan: it was not measured by ballbar measure");
+}
+
+std::vector<acq::CapturedPoint> load_points(storage::Store& store, std::int64_t session_id, const acq::Plan& plan) {
+    std::vector<acq::CapturedPoint> out;
+    for (const auto& r : store.points(session_id)) {
+        const std::size_t i = out.size();
+        if (i >= plan.points.size()) throw acq::PlanError("session has more points than its plan");
+        const acq::PlannedPoint& pp = plan.points[i];
+        if (r.reading.location != 2 * pp.test + (pp.step - 1) || r.reading.point != pp.point)
+            throw acq::PlanError("stored point " + std::to_string(i) + " does not match the plan's order");
+        acq::CapturedPoint c;
+        c.planned = pp;
+        c.measured_mm = r.reading.measured_mm;
+        c.std_mm = r.reading.std_mm.value_or(0);
+        c.n = static_cast<std::size_t>(r.reading.n);
+        c.first_seq = r.first_seq.value_or(0);
+        c.last_seq = r.last_seq.value_or(0);
+        c.time_s = r.reading.time_s;
+        c.bar_temp_C = r.reading.bar_temp_C.value_or(20);
+        out.push_back(c);
+    }
+    return out;
+}
+
+// ---- TerminalOperator ------------------------------------------------------------------------------
+
+TerminalOperator::TerminalOperator(std::istream& in, std::ostream& out, bool color, const acq::Plan& plan,
+                                   std::string program_path)
+    : in_(in), out_(out), color_(color), plan_(plan), program_path_(std::move(program_path)) {}
+
+void TerminalOperator::end_progress_line() {
+    if (progress_line_) out_ << '\n';
+    progress_line_ = false;
+}
+
+bool TerminalOperator::confirm(std::string_view, std::string_view prompt) {
+    end_progress_line();
+    out_ << (color_ ? "\033[1m" : "") << prompt << (color_ ? "\033[0m" : "") << " [Y/n] " << std::flush;
+    std::string line;
+    if (!std::getline(in_, line)) {
+        out_ << "\n";
+        return false;
+    }
+    return line.empty() || line[0] == 'y' || line[0] == 'Y';
+}
+
+void TerminalOperator::message(std::string_view text) {
+    end_progress_line();
+    out_ << (color_ ? "\033[36m" : "") << text << (color_ ? "\033[0m" : "") << '\n' << std::flush;
+}
+
+acq::PointFailureAction TerminalOperator::point_failed(const acq::CapturedPoint& p, std::string_view why) {
+    end_progress_line();
+    out_ << (color_ ? "\033[31m" : "") << "Point test " << p.planned.test + 1 << " step " << p.planned.step << " point "
+         << p.planned.point + 1 << " failed: " << why << (color_ ? "\033[0m" : "") << "\n[r]etry, [a]ccept or a[b]ort? "
+         << std::flush;
+    std::string line;
+    if (!std::getline(in_, line)) return acq::PointFailureAction::Abort;
+    if (!line.empty() && line[0] == 'a') return acq::PointFailureAction::Accept;
+    if (!line.empty() && line[0] == 'b') return acq::PointFailureAction::Abort;
+    return acq::PointFailureAction::Retry;
+}
+
+void TerminalOperator::wait_at_point(const acq::PlannedPoint& p) {
+    end_progress_line();
+    out_ << "Move to test " << p.test + 1 << " step " << p.step << " point " << p.point + 1 << " (X " << p.pose.X_mm
+         << " Y " << p.pose.Y_mm << " Z " << p.pose.Z_mm << ") and press Enter when the machine stands. " << std::flush;
+    std::string line;
+    std::getline(in_, line);
+}
+
+void TerminalOperator::progress(const acq::Progress& p) {
+    constexpr int kWidth = 30;
+    const double frac = p.total ? static_cast<double>(p.done) / static_cast<double>(p.total) : 0;
+    const int filled = static_cast<int>(frac * kWidth);
+    std::ostringstream os;
+    os << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+       << std::string(static_cast<std::size_t>(kWidth - filled), '.') << "] " << p.done << "/" << p.total << "  test "
+       << p.test + 1 << " step " << p.step << " point " << p.point + 1 << "  bar ";
+    os.setf(std::ios::fixed);
+    os.precision(4);
+    const double dev_um = (p.live_mm - p.expected_mm) * 1e3;
+    const bool near = std::abs(dev_um) < 500;
+    os << (color_ ? (near ? "\033[32m" : "\033[33m") : "") << p.live_mm << " mm" << (color_ ? "\033[0m" : "");
+    os.precision(1);
+    os << " (" << (dev_um >= 0 ? "+" : "") << dev_um << " µm)";
+    if (p.fill > 0) os << " averaging " << static_cast<int>(p.fill * 100) << "%";
+    os << "   ";
+    out_ << os.str() << std::flush;
+    progress_line_ = true;
+}
+
+void TerminalOperator::run_program(std::size_t from_point) {
+    end_progress_line();
+    const acq::PlannedPoint& p = plan_.points[from_point];
+    std::string where = "test " + std::to_string(p.test + 1) + " step " + std::to_string(p.step) + " point " +
+                        std::to_string(p.point + 1);
+    if (!program_path_.empty()) {
+        std::ofstream f(program_path_);
+        f << acq::write_plan_program(plan_, from_point);
+        if (!f) throw SourceError("cannot write the NC program to " + program_path_);
+        out_ << "NC program written to " << program_path_ << ". ";
+    }
+    out_ << "Start the NC program on the machine now (from " << where << ")." << std::endl;
+}
+
+}  // namespace ballbar::app

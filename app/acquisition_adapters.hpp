@@ -1,0 +1,105 @@
+// SPDX-License-Identifier: MIT
+// The acquisition's interfaces on real parts: the instrument driver as a SampleSource, the database as
+// a SessionSink, the terminal as an Operator. Used by `ballbar measure` and `ballbar demo`.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "ballbar/acquisition/interfaces.hpp"
+#include "ballbar/device/instrument.hpp"
+#include "ballbar/storage/sample_writer.hpp"
+#include "ballbar/storage/store.hpp"
+
+namespace ballbar::app {
+
+/// The instrument driver over a transport that `open` (re)creates: reconnecting opens a new link.
+/// Samples are renumbered into one contiguous host sequence across reconnects; a gap the driver
+/// reports (kSampleAfterGap) skips one number so the acquisition sees it.
+class DeviceSource : public acquisition::SampleSource {
+  public:
+    using Opener = std::function<std::unique_ptr<device::Transport>()>;
+    explicit DeviceSource(Opener open, int sample_rate_hz = 1000);
+
+    acquisition::InstrumentStatus connect() override;
+    void set_reference() override;
+    void start() override;
+    acquisition::ReadStatus read(std::span<analysis::BarSample> out, std::size_t& n,
+                                 std::chrono::milliseconds timeout) override;
+    bool reconnect(std::chrono::milliseconds timeout) override;
+
+    const std::optional<device::InstrumentInfo>& info() const { return info_; }
+    std::uint64_t lost_frames() const { return lost_frames_ + (inst_ ? inst_->stats().lost_frames : 0); }
+
+  private:
+    acquisition::InstrumentStatus open_and_identify();
+
+    Opener open_;
+    int rate_hz_;
+    std::unique_ptr<device::Instrument> inst_;
+    std::optional<device::InstrumentInfo> info_;
+    std::uint64_t next_seq_ = 0;
+    std::uint64_t lost_frames_ = 0;
+};
+
+/// Stores a session as it happens: samples through a SampleWriter, points, the fine-grained audit
+/// trail and the results (kinds "acquisition.plan", "acquisition.transition", "ssm", "orientation").
+class StoreSink : public acquisition::SessionSink {
+  public:
+    StoreSink(storage::Store& store, std::int64_t session_id, const acquisition::Plan& plan);
+
+    void on_transition(const acquisition::TransitionRecord& t) override;
+    void on_samples(std::span<const analysis::BarSample> samples) override;
+    void on_point(const acquisition::CapturedPoint& p) override;
+    void on_location(const acquisition::LocationResult& r) override;
+    void on_test(const acquisition::TestResult& r) override;
+    /// Commits pending samples and moves the stored session to the state matching `final_state`.
+    void finish(acquisition::State final_state, const std::string& reason);
+
+  private:
+    storage::Store& store_;
+    std::int64_t id_;
+    const acquisition::Plan& plan_;
+    storage::SampleWriter writer_;
+};
+
+/// Stores the plan with a new session (for --resume) and reads it back.
+void store_plan(storage::Store& store, std::int64_t session_id, const acquisition::Plan& plan);
+acquisition::Plan load_plan(storage::Store& store, std::int64_t session_id);
+/// The points of a stored session, as the acquisition captured them (plan order).
+std::vector<acquisition::CapturedPoint> load_points(storage::Store& store, std::int64_t session_id,
+                                                    const acquisition::Plan& plan);
+
+/// The session's results as JSON (kinds "ssm" / "orientation").
+std::string location_json(const acquisition::LocationResult& r);
+std::string test_json(const acquisition::TestResult& r);
+
+/// The operator at a terminal: prompts on `out`, answers from `in`; a progress bar with the live bar
+/// reading; colour only when `color`. `run_program` asks the operator to start the NC program and writes
+/// it to `program_path` (when set).
+class TerminalOperator : public acquisition::Operator {
+  public:
+    TerminalOperator(std::istream& in, std::ostream& out, bool color, const acquisition::Plan& plan,
+                     std::string program_path);
+    bool confirm(std::string_view what, std::string_view prompt) override;
+    void message(std::string_view text) override;
+    acquisition::PointFailureAction point_failed(const acquisition::CapturedPoint& p, std::string_view why) override;
+    void wait_at_point(const acquisition::PlannedPoint& p) override;
+    void progress(const acquisition::Progress& p) override;
+    void run_program(std::size_t from_point) override;
+
+  private:
+    void end_progress_line();
+    std::istream& in_;
+    std::ostream& out_;
+    bool color_;
+    const acquisition::Plan& plan_;
+    std::string program_path_;
+    bool progress_line_ = false;
+};
+
+}  // namespace ballbar::app

@@ -1,0 +1,281 @@
+// SPDX-License-Identifier: MIT
+// `ballbar demo`: the whole guided two-step SSM procedure against the emulator. The emulator (a
+// seed-like machine with known errors and a 0.1 µm bar) is served on a pseudo-terminal by a thread of
+// this process, on simulated time as fast as the host reads; the procedure talks to it through the real
+// path (serial transport on the pty → protocol → driver), stores the session, and prints the measured
+// total position and orientation errors next to the emulator's true values (docs/procedure.md).
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "acquisition_adapters.hpp"
+#include "ballbar/acquisition/compute.hpp"
+#include "ballbar/acquisition/nc_writer.hpp"
+#include "ballbar/acquisition/session.hpp"
+#include "ballbar/device/emulator_host.hpp"
+#include "ballbar/device/uri.hpp"
+#include "command.hpp"
+#if __has_include("compensation_demo.hpp")
+#include "compensation_demo.hpp"
+#define BALLBAR_HAVE_COMPENSATION_DEMO 1
+#endif
+
+namespace ballbar::app {
+namespace {
+
+namespace acq = ballbar::acquisition;
+namespace ba = ballbar::analysis;
+using nlohmann::json;
+
+struct DemoOptions {
+    std::string machine = "TTTRR";
+    std::uint64_t seed = 1;
+    bool json = false;
+    bool compensate = false;
+};
+
+/// Answers every question with yes and drives the emulator's machine when the program should run.
+class DemoOperator : public acq::ScriptedOperator {
+  public:
+    DemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, bool show_progress)
+        : acq::ScriptedOperator(plan.spec.answers), plan_(plan), machine_(machine), show_(show_progress) {}
+    void run_program(std::size_t from_point) override {
+        machine_.stop(0);  // stops wherever it is now
+        machine_.run_program(acq::make_nc_program(plan_, from_point));
+    }
+    void progress(const acq::Progress& p) override {
+        if (!show_ || p.done == last_done_) return;
+        last_done_ = p.done;
+        std::fprintf(stderr, "\r  captured %zu/%zu points", p.done, p.total);
+        std::fflush(stderr);
+    }
+    void message(std::string_view text) override {
+        if (show_) std::fprintf(stderr, "\r  %.*s\n", static_cast<int>(text.size()), text.data());
+    }
+    ~DemoOperator() override {
+        if (show_) std::fputc('\n', stderr);
+    }
+
+  private:
+    const acq::Plan& plan_;
+    device::SimulatedMachine& machine_;
+    bool show_;
+    std::size_t last_done_ = static_cast<std::size_t>(-1);
+};
+
+/// The emulator on a pty, served by a thread until destroyed.
+class PtyEmulator {
+  public:
+    explicit PtyEmulator(device::EmulatorConfig config) : emu_(std::move(config)) {
+        device::HostOptions ho;
+        ho.pacing = device::Pacing::Simulated;
+        ho.stop = &stop_;
+        host_ = std::make_unique<device::EmulatorHost>(emu_, ho);
+        thread_ = std::thread([this] {
+            try {
+                host_->run_pty([this](const std::string& path) {
+                    std::lock_guard lock(mutex_);
+                    path_ = path;
+                    cv_.notify_all();
+                });
+            } catch (const std::exception& e) {
+                std::lock_guard lock(mutex_);
+                error_ = e.what();
+                cv_.notify_all();
+            }
+        });
+    }
+    ~PtyEmulator() {
+        stop_ = true;
+        thread_.join();
+    }
+    /// The current pty (a new one after a simulated disconnect).
+    std::string path() {
+        std::unique_lock lock(mutex_);
+        if (!cv_.wait_for(lock, std::chrono::seconds(10), [this] { return !path_.empty() || !error_.empty(); }))
+            throw CliError(kExitFailure, "the emulator did not open a pseudo-terminal");
+        if (!error_.empty()) throw CliError(kExitFailure, "emulator: " + error_);
+        return path_;
+    }
+    device::Emulator& emulator() { return emu_; }
+
+  private:
+    device::Emulator emu_;
+    std::atomic<bool> stop_{false};
+    std::unique_ptr<device::EmulatorHost> host_;
+    std::thread thread_;
+    std::mutex mutex_;
+    std::condition_variable cv_;
+    std::string path_, error_;
+};
+
+json angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType type, acq::TestKind kind) {
+    if (!e) return nullptr;
+    json j = json::object();
+    const bool rtttr = type == ba::MachineType::RTTTR;
+    if (!rtttr || kind == acq::TestKind::TableAlpha) j["d_alpha"] = e->d_alpha_rad;
+    if (type == ba::MachineType::RRTTT || (rtttr && kind == acq::TestKind::SpindleBeta)) j["d_beta"] = e->d_beta_rad;
+    if (type == ba::MachineType::TTTRR) j["d_gamma"] = e->d_gamma_rad;
+    return j;
+}
+
+std::string arcsec(const json& angles) {
+    std::ostringstream os;
+    os.setf(std::ios::fixed);
+    os.precision(2);
+    if (angles.is_null()) return "singular";
+    bool first = true;
+    for (const auto& [k, v] : angles.items()) {
+        os << (first ? "" : "  ") << k << " " << ba::rad_to_arcsec(v.get<double>()) << "\"";
+        first = false;
+    }
+    return os.str();
+}
+
+int run_demo(const DemoOptions& o, const Globals& globals) {
+    const auto type = ba::parse_machine_type(o.machine);
+    if (!type) throw CliError(kExitUsage, "--machine must be RRTTT, TTTRR or RTTTR");
+    const acq::MachineFile machine = acq::seed_machine(*type);
+    acq::PlanSpec spec = acq::default_plan(machine);
+    spec.answers.operator_name = "demo";
+    const acq::Plan plan = acq::make_plan(machine, spec);
+
+    device::EmulatorConfig cfg;
+    cfg.seed = o.seed;
+    cfg.instrument.calibrated_length_mm = spec.bar_length_mm;
+    cfg.instrument.noise_um = 0.1;
+    cfg.machine.geometry = machine.geometry;
+    cfg.machine.errors = acq::demo_errors(*type);
+    cfg.machine.socket_mm = plan.points.front().socket_mm;
+    cfg.machine.start = plan.points.front().pose;
+    PtyEmulator emulator(cfg);
+
+    storage::Store store(resolve_db_path(globals));
+    storage::NewSession ns;
+    ns.machine = machine.geometry;
+    ns.source = storage::SessionSource::emulator;
+    ns.operator_name = "demo";
+    ns.procedure = "ssm-two-step";
+    ns.notes = "ballbar demo --machine " + o.machine + " --seed " + std::to_string(o.seed);
+    storage::Instrument inst;
+    inst.model = cfg.instrument.model;
+    inst.serial = cfg.instrument.serial;
+    inst.firmware = cfg.instrument.firmware;
+    inst.calibrated_length_mm = cfg.instrument.calibrated_length_mm;
+    ns.instrument = inst;
+    const std::int64_t id = store.create_session(ns);
+    store.start_session(id);
+    store_plan(store, id, plan);
+
+    const bool show = !o.json && ::isatty(STDERR_FILENO);
+    if (!o.json)
+        std::cout << "ballbar demo: " << o.machine << " (" << machine.geometry.name << "), " << plan.test_count()
+                  << " two-step tests, " << plan.points.size() << " points; emulator on " << emulator.path() << "\n";
+    DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
+    StoreSink sink(store, id, plan);
+    DemoOperator op(plan, emulator.emulator().machine(), show);
+    acq::Session session(plan, source, sink, op);
+    const acq::SessionSummary sum = session.run();
+    sink.finish(sum.final_state, sum.reason);
+    if (sum.final_state != acq::State::Done)
+        throw CliError(kExitFailure, "demo session " + std::to_string(id) + " ended " +
+                                         std::string(acq::to_string(sum.final_state)) + ": " + sum.reason);
+
+    // Compare with the truth.
+    const auto truth = acq::true_values(plan, cfg.machine.errors);
+    json out;
+    out["session"] = id;
+    out["machine"] = o.machine;
+    out["locations"] = json::array();
+    out["orientation"] = json::array();
+    std::vector<acq::LocationResult> locs;
+    for (const auto& r : store.results(id))
+        if (r.kind == "ssm") {
+            const json j = json::parse(r.payload_json);
+            acq::LocationResult l;
+            l.test = j.at("test");
+            l.step = j.at("step");
+            const auto e = j.at("e_exact_mm");
+            l.ssm.exact_mm = ba::Vec3(e[0], e[1], e[2]);
+            const auto s = j.at("e_std_mm");
+            l.ssm.std_mm = ba::Vec3(s[0], s[1], s[2]);
+            locs.push_back(l);
+        }
+    for (const auto& l : locs) {
+        const auto& t = truth[static_cast<std::size_t>(l.test)];
+        const ba::Vec3 tr = l.step == 1 ? t.e1_mm : t.e2_mm;
+        out["locations"].push_back({{"test", l.test + 1},
+                                    {"step", l.step},
+                                    {"measured_mm", {l.ssm.exact_mm.x(), l.ssm.exact_mm.y(), l.ssm.exact_mm.z()}},
+                                    {"std_mm", {l.ssm.std_mm.x(), l.ssm.std_mm.y(), l.ssm.std_mm.z()}},
+                                    {"true_mm", {tr.x(), tr.y(), tr.z()}}});
+    }
+    for (const auto& r : sum.tests) {
+        const auto& t = truth[static_cast<std::size_t>(r.test)];
+        out["orientation"].push_back(
+            {{"test", r.test + 1},
+             {"kind", std::string(acq::to_string(r.kind))},
+             {"measured_rad", angles_json(r.orientation.exact, *type, r.kind)},
+             {"true_rad", angles_json(t.result.orientation.exact, *type, r.kind)},
+             {"measured_first_order_rad", angles_json(r.orientation.first_order, *type, r.kind)},
+             {"true_first_order_rad", angles_json(t.result.orientation.first_order, *type, r.kind)}});
+    }
+    out["samples"] = sum.samples;
+
+    if (o.json) {
+        std::cout << out.dump() << std::endl;
+    } else {
+        std::printf("\nTotal position errors e = (b - s)actual - (b - s)nominal, µm (SSM exact, %s layout):\n",
+                    std::string(ba::to_string(plan.spec.layout)).c_str());
+        std::printf("  test step   measured (x, y, z)              true (x, y, z)                  |diff|\n");
+        for (const auto& l : out["locations"]) {
+            const auto& m = l["measured_mm"];
+            const auto& t = l["true_mm"];
+            const double d =
+                std::hypot(m[0].get<double>() - t[0].get<double>(), m[1].get<double>() - t[1].get<double>(),
+                           m[2].get<double>() - t[2].get<double>());
+            std::printf("  %4d %4d   %8.3f %8.3f %8.3f    %8.3f %8.3f %8.3f    %6.3f\n", l["test"].get<int>(),
+                        l["step"].get<int>(), 1e3 * m[0].get<double>(), 1e3 * m[1].get<double>(),
+                        1e3 * m[2].get<double>(), 1e3 * t[0].get<double>(), 1e3 * t[1].get<double>(),
+                        1e3 * t[2].get<double>(), 1e3 * d);
+        }
+        std::printf("\nOrientation errors (exact model), arc-seconds:\n");
+        for (const auto& t : out["orientation"])
+            std::printf("  test %d (%s): measured %s | true %s\n", t["test"].get<int>(),
+                        t["kind"].get<std::string>().c_str(), arcsec(t["measured_rad"]).c_str(),
+                        arcsec(t["true_rad"]).c_str());
+        std::printf("\nSession %lld stored in %s (%zu samples).\n", static_cast<long long>(id), store.path().c_str(),
+                    sum.samples);
+    }
+#ifdef BALLBAR_HAVE_COMPENSATION_DEMO
+    if (o.compensate) return run_compensation_demo(store, id, *type, o.seed, o.json);
+#else
+    if (o.compensate) throw CliError(kExitFailure, "--compensate: this build has no compensation demo");
+#endif
+    return kExitOk;
+}
+
+}  // namespace
+
+BALLBAR_COMMAND(demo) {
+    auto* sub =
+        root.add_subcommand("demo", "Run the guided two-step SSM procedure on the emulator and compare with the truth");
+    auto o = std::make_shared<DemoOptions>();
+    sub->add_option("--machine", o->machine, "Machine type: RRTTT, TTTRR or RTTTR")
+        ->check(CLI::IsMember({"RRTTT", "TTTRR", "RTTTR"}));
+    sub->add_option("--seed", o->seed, "Seed of the emulator's noise (same seed, same session)");
+    sub->add_flag("--json", o->json, "Print the comparison as JSON");
+    sub->add_flag("--compensate", o->compensate, "Then identify the errors and show the compensation");
+    sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });
+}
+
+}  // namespace ballbar::app
