@@ -226,6 +226,12 @@ void Emulator::produce_samples_until(std::uint64_t t_us) {
     if (pending_.count > 0 && t_us >= pending_first_us_ + kFlushUs) flush_stream();
 }
 
+void Emulator::host_link_lost() {
+    const bool was = connected_;
+    go_disconnected();
+    connected_ = was;
+}
+
 void Emulator::go_disconnected() {
     connected_ = false;
     streaming_ = false;

@@ -204,6 +204,7 @@ void EmulatorHost::run_tcp(TcpListener& listener) {
         event("client connected");
         const End end = serve_fd(fd);
         ::close(fd);
+        if (end == End::PeerClosed) emu_.host_link_lost();
         event(end == End::DeviceDisconnected ? "simulated disconnect: connection closed" : "client left");
     }
 }

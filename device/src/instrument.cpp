@@ -46,6 +46,12 @@ void Instrument::protocol_error(const std::string& what) const {
 }
 
 void Instrument::on_stream(const p::FrameView& frame) {
+    // Before StartReply only the new stream's first frames (from 0, in order) count; anything else is
+    // left over from an earlier session (a host that went away without Stop).
+    if (!streaming_ && (!start_pending_ || frame.seq != expected_stream_seq_)) {
+        ++stats_.stale_frames;
+        return;
+    }
     if (!p::parse_stream(frame.body, frame_)) {
         ++stats_.invalid_frames;
         gap_pending_ = true;
@@ -139,6 +145,7 @@ Instrument::Reply Instrument::request(p::MsgType type, std::span<const std::uint
             // Stream frames may overtake a slow StartReply: count from 0 from now on.
             expected_stream_seq_ = 0;
             gap_pending_ = false;
+            start_pending_ = true;
         }
         transport_->write({buf.data(), n}, options_.reply_timeout);
         waiting_seq_ = seq;
@@ -152,6 +159,7 @@ Instrument::Reply Instrument::request(p::MsgType type, std::span<const std::uint
             remaining -= duration_cast<microseconds>(steady_clock::now() - t0);
         }
         waiting_seq_.reset();
+        start_pending_ = false;
         if (!reply_) continue;
         Reply r = *reply_;
         reply_.reset();

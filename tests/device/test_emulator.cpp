@@ -410,3 +410,21 @@ TEST(Config, ParsesEverySectionAndRejectsMistakes) {
     fails_naming(R"({"program": {"text": "G2 X1\n"}})", "line 1");
     fails_naming(R"({)", "not valid JSON");
 }
+
+TEST(Driver, FramesOfAnAbandonedSessionAreNotCountedAsLost) {
+    Emulator emu(quiet_config());
+    {
+        auto first = connect(emu);
+        first->start_streaming();
+        ASSERT_EQ(stream_for(*first, 1000).size(), 1000u);
+    }  // gone without Stop: the device keeps streaming into the link
+    emu.advance_to(emu.now_us() + 200'000);
+    auto second = connect(emu);
+    second->identify();
+    EXPECT_GT(second->stats().stale_frames, 0u);
+    EXPECT_TRUE(second->status().streaming);
+    second->start_streaming();  // restarts the stream from sequence 0
+    ASSERT_EQ(stream_for(*second, 3000).size(), 3000u);
+    EXPECT_EQ(second->stats().lost_frames, 0u);
+    EXPECT_EQ(second->stats().gaps, 0u);
+}

@@ -78,6 +78,9 @@ class Emulator : public DeviceEndpoint {
     void on_host_bytes(std::span<const std::uint8_t> data) override;
     std::size_t take_device_bytes(std::span<std::uint8_t> out) override;
 
+    /// The host side of the link went away (USB unplug, TCP client gone): a bus-powered instrument
+    /// loses power; it stops streaming, drops queued output and forgets a partial request.
+    void host_link_lost();
     /// Moves the simulated clock forward (never back) and produces what the device would have sent.
     void advance_to(std::uint64_t t_us);
     std::uint64_t now_us() const { return now_us_; }

@@ -54,6 +54,7 @@ struct StreamStats {
     std::uint64_t queue_drops = 0;     ///< samples lost because the queue was full
     std::uint64_t invalid_frames = 0;  ///< rejected by the decoder (CRC, framing)
     std::uint64_t stale_replies = 0;   ///< replies to requests we no longer wait for
+    std::uint64_t stale_frames = 0;    ///< stream frames of an earlier session, before StartReply
 };
 
 /// Bounded single-producer/single-consumer ring of samples, allocated once.
@@ -131,6 +132,7 @@ class Instrument {
     std::optional<std::uint16_t> waiting_seq_;
     std::optional<Reply> reply_;
     bool streaming_ = false;
+    bool start_pending_ = false;
     std::uint16_t expected_stream_seq_ = 0;
     bool gap_pending_ = false;
     std::uint64_t host_seq_ = 0;
