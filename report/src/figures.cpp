@@ -104,9 +104,18 @@ void figure_discovery(Document& doc, const std::vector<DiscoveryStep>& steps) {
             const auto& s = steps[j];
             Plot p("Step " + std::to_string(j + 1) + ": " + s.effect);
             p.x_axis(s.variable, s.variable_unit).y_axis("residual", "µm").include_zero_y();
-            p.scatter("before (rms " + fixed(s.rms_before_um, kUmDecimals) + " µm)", s.x, s.before_um, kGrey, 1.5,
-                      true);
-            p.scatter("after (rms " + fixed(s.rms_after_um, kUmDecimals) + " µm)", s.x, s.after_um, palette(0), 1.3);
+            if (s.binned) {  // binned means of the workflow's first and last residuals
+                p.line("before discovery (bin means)", s.x, s.before_um, kGrey, 0.8);
+                p.scatter("", s.x, s.before_um, kGrey, 1.8, true);
+                p.line("after discovery (bin means)", s.x, s.after_um, palette(0), 0.8);
+                p.scatter("", s.x, s.after_um, palette(0), 1.6);
+            } else {
+                p.scatter("before (rms " + fixed(s.rms_before_um, kUmDecimals) + " µm)", s.x, s.before_um, kGrey, 1.5,
+                          true);
+                p.scatter("after (rms " + fixed(s.rms_after_um, kUmDecimals) + " µm)", s.x, s.after_um, palette(0),
+                          1.3);
+            }
+            if (s.x.empty()) p.note("no residuals stored for this step");
             const double w = area.w / 2;
             p.draw(doc.cr(), {area.x + static_cast<double>(j - i) * w + (j > i ? 6 : 0), area.y, w - 6, area.h});
         }

@@ -139,6 +139,7 @@ nlohmann::json to_json(const Report& r) {
                         {"rms_before_um", opt(s.rms_before_um)},
                         {"rms_after_um", opt(s.rms_after_um)},
                         {"accepted", s.accepted ? json(*s.accepted) : json(nullptr)},
+                        {"binned", s.binned},
                         {"note", s.note}});
 
     json comp = json::array();

@@ -2,6 +2,7 @@
 #include "ballbar/report/results.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 
@@ -83,7 +84,7 @@ void add_ssm(Report& r, std::string_view kind, const json& p) {
     const auto dv = opt_vec(kind, p, "dV_mm");
     if (!dv) bad(kind, "dV_mm", "is missing");
     l.error_um = *dv * 1000.0;
-    if (const auto s = opt_vec(kind, p, "std_mm")) l.uncertainty_um = *s * 1000.0;
+    if (const auto s = opt_vec(kind, p, find(p, "e_std_mm") ? "e_std_mm" : "std_mm")) l.uncertainty_um = *s * 1000.0;
     if (const auto d = opt_vec(kind, p, "datum_mm")) l.position_mm = *d;
     l.points = opt_int(kind, p, "n", 0);
     if (const auto rms = opt_num(kind, p, "residual_rms_mm")) l.residual_rms_um = *rms * 1000.0;
@@ -171,23 +172,81 @@ void add_identification(Report& r, std::string_view kind, const json& p) {
     r.model = m;
 }
 
+/// Display name, unit and factor of an explaining variable of the discovery workflow.
+struct VariableInfo {
+    std::string label, unit;
+    double factor = 1;
+};
+VariableInfo variable_info(const std::string& v) {
+    if (v == "time") return {"session time", "s", 1};
+    if (v == "bar_temperature") return {"bar temperature", "°C", 1};
+    if (v == "X" || v == "Y" || v == "Z") return {v, "mm", 1};
+    if (v == "A" || v == "B" || v == "C") return {v, "°", analysis::rad_to_deg(1.0)};
+    if (v == "bar_direction") return {"bar direction", "", 1};
+    return {v, "", 1};
+}
+
+/// The binned residual trend against `variable` from a list of {variable, bin_centre, bin_mean_um}.
+bool trend_of(std::string_view kind, const json* trends, const std::string& variable, std::vector<double>& x,
+              std::vector<double>& y_um) {
+    if (!trends || !trends->is_array()) return false;
+    for (const auto& t : *trends) {
+        if (opt_str(kind, t, "variable") != variable) continue;
+        x = nums(kind, t, "bin_centre");
+        y_um = nums(kind, t, "bin_mean_um");
+        return !x.empty() && x.size() == y_um.size();
+    }
+    return false;
+}
+
 void add_discovery(Report& r, std::string_view kind, const json& p) {
     const json* steps = find(p, "steps");
     if (!steps || !steps->is_array()) bad(kind, "steps", "must be an array");
+    const json* details = find(p, "details");
     for (const auto& s : *steps) {
         DiscoveryStep d;
         d.effect = opt_str(kind, s, "effect");
-        d.variable = opt_str(kind, s, "variable");
-        d.variable_unit = opt_str(kind, s, "variable_unit");
-        d.x = nums(kind, s, "x");
-        for (double v : nums(kind, s, "before_mm")) d.before_um.push_back(v * 1000);
-        for (double v : nums(kind, s, "after_mm")) d.after_um.push_back(v * 1000);
-        if (d.before_um.size() != d.x.size() || d.after_um.size() != d.x.size())
-            bad(kind, "x", "must have as many values as before_mm and after_mm");
+        if (const std::string iso = opt_str(kind, s, "iso"); !iso.empty()) d.effect += " (" + iso + ")";
+        if (find(s, "x")) {  // per-reading residuals against the variable, before and after the step
+            d.variable = opt_str(kind, s, "variable");
+            d.variable_unit = opt_str(kind, s, "variable_unit");
+            d.x = nums(kind, s, "x");
+            for (double v : nums(kind, s, "before_mm")) d.before_um.push_back(v * 1000);
+            for (double v : nums(kind, s, "after_mm")) d.after_um.push_back(v * 1000);
+            if (d.before_um.size() != d.x.size() || d.after_um.size() != d.x.size())
+                bad(kind, "x", "must have as many values as before_mm and after_mm");
+        } else {  // `ballbar discover`: binned trends of the whole run, before its first and after its last step
+            const std::string v = opt_str(kind, s, "explained_by");
+            const VariableInfo vi = variable_info(v);
+            d.variable = vi.label;
+            d.variable_unit = vi.unit;
+            std::vector<double> xb, yb, xa, ya;
+            const json* initial = details ? find(*details, "residuals_initial") : nullptr;
+            const json* final_ = details ? find(*details, "residuals_final") : nullptr;
+            if (trend_of(kind, initial, v, xb, yb) && trend_of(kind, final_, v, xa, ya) && xa.size() == xb.size()) {
+                for (double& x : xb) x *= vi.factor;
+                d.x = xb;
+                d.before_um = yb;
+                d.after_um = ya;
+                d.binned = true;
+            }
+        }
         if (const auto v = opt_num(kind, s, "rms_before_mm")) d.rms_before_um = *v * 1000;
         if (const auto v = opt_num(kind, s, "rms_after_mm")) d.rms_after_um = *v * 1000;
-        if (const json* a = find(s, "accepted"); a && a->is_boolean()) d.accepted = a->get<bool>();
+        if (const auto v = opt_num(kind, s, "rms_before_um")) d.rms_before_um = *v;
+        if (const auto v = opt_num(kind, s, "rms_after_um")) d.rms_after_um = *v;
+        if (const json* a = find(s, "accepted"); a && a->is_boolean())
+            d.accepted = a->get<bool>();
+        else if (!find(s, "x"))
+            d.accepted = true;  // the workflow lists the effects it added
         d.note = opt_str(kind, s, "note");
+        if (d.note.empty() && find(s, "estimate")) {
+            const auto [factor, unit] = display_unit(opt_str(kind, s, "unit"));
+            char buf[96];
+            std::snprintf(buf, sizeof buf, "%.4g ± %.2g %s", num(kind, s, "estimate") * factor,
+                          opt_num(kind, s, "stderr").value_or(0) * factor, unit.c_str());
+            d.note = buf;
+        }
         r.discovery.push_back(d);
     }
 }
@@ -223,7 +282,7 @@ void add_procedure(Report& r, std::string_view kind, const json& p) {
 
 bool is_known_result_kind(std::string_view kind) {
     return kind == "ssm" || kind == "orientation" || kind == "identification" || kind == "discovery" ||
-           kind == "compensation" || kind == "procedure";
+           kind == "compensation" || kind == "procedure" || kind == "acquisition.transition";
 }
 
 bool add_result(Report& report, std::string_view kind, const nlohmann::json& payload) {

@@ -162,10 +162,25 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
             throw ReportError("result " + std::to_string(res.id) + " (" + res.kind +
                               "): payload is not JSON: " + e.what());
         }
+        if (res.kind == "acquisition.transition" && payload.is_object()) {  // stored as it happened
+            payload["at"] = res.created_at;
+            const double wall = parse_iso8601(res.created_at);
+            payload["time_s"] = std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0;
+        }
         try {
             add_result(r, res.kind, payload);
         } catch (const ReportError& e) {
             throw ReportError("result " + std::to_string(res.id) + ": " + e.what());
+        }
+    }
+    // The commanded angle of an orientation error: the axis's angle at the points after the rotation.
+    for (auto& o : r.orientation) {
+        if (o.commanded_rad || o.to_location < 0) continue;
+        for (const auto& p : points) {
+            if (p.reading.location != o.to_location) continue;
+            const auto& pose = p.reading.pose;
+            o.commanded_rad = o.axis == "A" ? pose.A_rad : o.axis == "B" ? pose.B_rad : pose.C_rad;
+            break;
         }
     }
     std::stable_sort(r.procedure.begin(), r.procedure.end(),

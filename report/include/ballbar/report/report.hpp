@@ -124,6 +124,7 @@ struct DiscoveryStep {
     std::vector<double> before_um, after_um;  ///< residuals at each reading (same length as x)
     std::optional<double> rms_before_um, rms_after_um;
     std::optional<bool> accepted;
+    bool binned = false;  ///< before/after are binned means of the whole workflow's first and last residuals
     std::string note;
 };
 
