@@ -25,9 +25,7 @@ double angle_between(const Vec3& a, const Vec3& b) {
 
 }  // namespace
 
-Mat3 MachineModel::Axis::rotation(double angle_rad) const {
-    const double c0 = std::cos(angle_rad);
-    const double s0 = std::sin(angle_rad);
+Mat3 MachineModel::Axis::rotation(double c0, double s0) const {
     const double c = c0 * cos_zero - s0 * sin_zero;  // cos(angle + zero offset)
     const double s = s0 * cos_zero + c0 * sin_zero;
     Mat3 r = (1.0 - c) * outer + s * cross;
@@ -66,12 +64,20 @@ MachineModel::MachineModel(const MachineGeometry& geom, const ErrorParams& e) : 
     }
 }
 
+MachineModel::Trig MachineModel::trig(MachineType type, const Pose& pose) {
+    const double r1 = rotary_angle(type, pose, 0);
+    const double r2 = rotary_angle(type, pose, 1);
+    return {std::cos(r1), std::sin(r1), std::cos(r2), std::sin(r2)};
+}
+
 ToolPose MachineModel::tool_pose(const Pose& pose) const {
+    return tool_pose(pose, trig(geom_.type, pose));
+}
+
+ToolPose MachineModel::tool_pose(const Pose& pose, const Trig& tr) const {
     const Vec3 pivot = detail::linear_axes(e_, pose);
-    const double r1 = rotary_angle(geom_.type, pose, 0);
-    const double r2 = rotary_angle(geom_.type, pose, 1);
-    const Mat3 ra = first_.rotation(r1);
-    const Mat3 rb = second_.rotation(r2);
+    const Mat3 ra = first_.rotation(tr.c1, tr.s1);
+    const Mat3 rb = second_.rotation(tr.c2, tr.s2);
     Mat3 rt = Mat3::Identity();  // table frame → machine
     Vec3 t = Vec3::Zero();
     Vec3 ball = Vec3::Zero();
@@ -125,14 +131,19 @@ Compensator::Compensator(const MachineGeometry& geom, const ErrorParams& e, Comp
     if (options_.max_iterations < 1) throw AnalysisError("compensation: max_iterations must be at least 1");
 }
 
-std::array<double, 5> Compensator::step(const Pose& u, const Vec3& dw, const Vec3& dq, int& suppressed) const {
+std::array<double, 5> Compensator::step(const Pose& u, const MachineModel::Trig& tr, const Vec3& dw, const Vec3& dq,
+                                        int& suppressed) const {
     // Nominal Jacobian at u: the table rotation, the tool ball and axis (machine frame), and each rotary
     // axis's current line. A table axis turns the workpiece under the tool (sign −), a head axis the tool.
     const MachineGeometry& g = nominal_.geometry();
-    const double a = u.A_rad;
-    const Mat3 rx = rot_x(a);
+    Mat3 rx, r2;
+    rx << 1, 0, 0, 0, tr.c1, -tr.s1, 0, tr.s1, tr.c1;
+    if (g.type == MachineType::TTTRR)
+        r2 << tr.c2, -tr.s2, 0, tr.s2, tr.c2, 0, 0, 0, 1;  // Rz(C)
+    else
+        r2 << tr.c2, 0, tr.s2, 0, 1, 0, -tr.s2, 0, tr.c2;  // Ry(B)
     Mat3 rt = Mat3::Identity();
-    Vec3 ball = nominal_tool_ball(g, u);
+    Vec3 ball = u.linear_mm();
     Vec3 dir = Vec3::UnitZ();
     struct Line {
         Vec3 k, p;
@@ -140,18 +151,21 @@ std::array<double, 5> Compensator::step(const Pose& u, const Vec3& dw, const Vec
     } lines[2];
     switch (g.type) {
         case MachineType::TTTRR:
-            rt = rx * rot_z(u.C_rad);
+            rt = rx * r2;
+            ball += g.tool_ball_mm;
             lines[0] = {Vec3::UnitX(), g.a_pivot_mm, -1};
             lines[1] = {rx * Vec3::UnitZ(), g.a_pivot_mm + rx * g.c_offset_mm, -1};
             break;
         case MachineType::RRTTT:
-            dir = rx * (rot_y(u.B_rad) * Vec3::UnitZ());
+            dir = rx * r2.col(2);
+            ball += rx * (r2 * g.tool_ball_mm);
             lines[0] = {Vec3::UnitX(), u.linear_mm(), 1};
             lines[1] = {rx * Vec3::UnitY(), u.linear_mm(), 1};
             break;
         case MachineType::RTTTR:
             rt = rx;
-            dir = rot_y(u.B_rad) * Vec3::UnitZ();
+            dir = r2.col(2);
+            ball += r2 * g.tool_ball_mm;
             lines[0] = {Vec3::UnitX(), g.a_pivot_mm, -1};
             lines[1] = {Vec3::UnitY(), u.linear_mm(), 1};
             break;
@@ -185,11 +199,12 @@ std::array<double, 5> Compensator::step(const Pose& u, const Vec3& dw, const Vec
 }
 
 Correction Compensator::first_order(const Pose& u) const {
-    const ToolPose want = nominal_.tool_pose(u);
-    const ToolPose got = actual_.tool_pose(u);
+    const MachineModel::Trig tr = MachineModel::trig(nominal_.geometry().type, u);
+    const ToolPose want = nominal_.tool_pose(u, tr);
+    const ToolPose got = actual_.tool_pose(u, tr);
     Correction c;
     int suppressed = -1;
-    c.du = step(u, want.position_mm - got.position_mm, want.direction - got.direction, suppressed);
+    c.du = step(u, tr, want.position_mm - got.position_mm, want.direction - got.direction, suppressed);
     c.singular = suppressed >= 0;
     c.suppressed_axis = suppressed;
     c.commanded = add_correction(nominal_.geometry().type, u, c.du);
@@ -211,7 +226,7 @@ Correction Compensator::exact(const Pose& u) const {
         c.position_error_mm = dw.norm();
         c.direction_error_rad = angle_between(want.direction, got.direction);
         if (c.iterations == options_.max_iterations) break;
-        const std::array<double, 5> inc = step(cur, dw, dq, suppressed);
+        const std::array<double, 5> inc = step(cur, MachineModel::trig(type, cur), dw, dq, suppressed);
         const bool direction_done = suppressed >= 0 ? std::abs(inc[3]) + std::abs(inc[4]) <= options_.tolerance_rad
                                                     : c.direction_error_rad <= options_.tolerance_rad;
         if (c.position_error_mm <= options_.tolerance_mm && direction_done) {

@@ -37,6 +37,13 @@ class MachineModel {
     ToolPose tool_pose(const Pose& pose) const;
     const MachineGeometry& geometry() const { return geom_; }
 
+    /// cos and sin of the commanded rotary angles, computed once per pose and shared.
+    struct Trig {
+        double c1 = 1, s1 = 0, c2 = 1, s2 = 0;
+    };
+    static Trig trig(MachineType type, const Pose& pose);
+    ToolPose tool_pose(const Pose& pose, const Trig& t) const;
+
   private:
     struct Axis {  // rotation about a fixed line: x ↦ point + R(θ + zero)(x − point)
         Vec3 point = Vec3::Zero();
@@ -44,7 +51,7 @@ class MachineModel {
         Mat3 cross = Mat3::Zero();  // [dir]×
         Mat3 outer = Mat3::Zero();  // dir·dirᵀ
         double cos_zero = 1, sin_zero = 0;
-        Mat3 rotation(double angle_rad) const;
+        Mat3 rotation(double cos_angle, double sin_angle) const;  // of the commanded angle
     };
     MachineGeometry geom_;
     ErrorParams e_;
@@ -87,7 +94,8 @@ class Compensator {
 
   private:
     // One linearised step: du from the pose error dv (intended − actual) at u; `suppress` forced axis.
-    std::array<double, 5> step(const Pose& u, const Vec3& dw, const Vec3& dq, int& suppressed) const;
+    std::array<double, 5> step(const Pose& u, const MachineModel::Trig& t, const Vec3& dw, const Vec3& dq,
+                               int& suppressed) const;
 
     MachineModel nominal_, actual_;
     CompensationOptions options_;
