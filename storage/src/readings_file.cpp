@@ -285,7 +285,10 @@ ReadingsFile parse_readings(std::string_view text) {
         names = read_record(in);
         break;
     }
-    if (!h.machine) throw ReadingsFileError(seen.empty() ? 2 : in.line(), "no \"# machine: {...}\" header line");
+    if (!h.machine) {
+        throw ReadingsFileError(columns_line ? columns_line : in.line(),
+                                "no \"# machine: {...}\" header line before the column row");
+    }
     if (columns_line == 0) throw ReadingsFileError(in.line(), "no column header row and no readings");
 
     ReadingsFile out;

@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: MIT
+// `ballbar export SESSION --format readings|json|csv --out PATH`. readings: the interchange file; json: the
+// whole session (metadata, transitions, points, results); csv: PATH is a directory that receives
+// points.csv and samples.csv (docs/storage.md). `--out -` writes readings or json to stdout.
+#include <fstream>
+#include <iostream>
+
+#include "ballbar/storage/readings.hpp"
+#include "ballbar/storage/readings_file.hpp"
+#include "ballbar/storage/session_export.hpp"
+#include "ballbar/storage/store.hpp"
+#include "command.hpp"
+
+namespace ballbar::app {
+namespace {
+
+struct ExportOptions {
+    std::string session;
+    std::string format = "readings";
+    std::string out;
+};
+
+void write_text(const std::string& path, const std::string& text) {
+    if (path == "-") {
+        std::cout << text;
+        return;
+    }
+    const std::string tmp = path + ".tmp";
+    {
+        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+        f << text;
+        f.flush();
+        if (!f) throw CliError(kExitFailure, "cannot write " + path);
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) throw CliError(kExitFailure, "cannot write " + path);
+}
+
+int run_export(const ExportOptions& o, const Globals& globals) {
+    try {
+        storage::StoreOptions so;
+        so.recover = false;  // a reader: leave sessions of a running acquisition alone
+        storage::Store store(resolve_db_path(globals), so);
+        const auto id = store.find_session(o.session);
+        if (o.format == "readings") {
+            const auto info = store.session(id);
+            const auto set = storage::load_readings(store, id);
+            if (set.readings.empty()) throw CliError(kExitFailure, "session " + std::to_string(id) + " has no points");
+            write_text(o.out, storage::format_readings(set, storage::readings_metadata(info)));
+        } else if (o.format == "json") {
+            write_text(o.out, storage::session_json(store, id) + "\n");
+        } else {
+            if (o.out == "-") throw CliError(kExitUsage, "--format csv writes two files: give --out DIRECTORY");
+            storage::export_csv(store, id, o.out);
+        }
+        if (o.out != "-")
+            std::cerr << "ballbar: exported session " << id << " (" << o.format << ") to " << o.out << '\n';
+        return kExitOk;
+    } catch (const storage::StorageError& e) {
+        const bool usage = e.kind() == storage::StorageError::Kind::not_found ||
+                           (e.kind() == storage::StorageError::Kind::invalid &&
+                            std::string(e.what()).find("ambiguous") != std::string::npos);
+        throw CliError(usage ? kExitUsage : kExitFailure, e.what());
+    }
+}
+
+}  // namespace
+}  // namespace ballbar::app
+
+BALLBAR_COMMAND(export) {
+    auto opts = std::make_shared<ballbar::app::ExportOptions>();
+    auto* sub = root.add_subcommand("export", "Export a session as a readings file, JSON or CSV");
+    sub->add_option("SESSION", opts->session, "session id or uuid prefix")->required();
+    sub->add_option("--format", opts->format, "readings | json | csv")
+        ->check(CLI::IsMember({"readings", "json", "csv"}))
+        ->capture_default_str();
+    sub->add_option("--out", opts->out, "output file (readings, json; - for stdout) or directory (csv)")->required();
+    sub->callback(
+        [opts, &globals] { globals.action = [opts, &globals] { return ballbar::app::run_export(*opts, globals); }; });
+}

@@ -1,0 +1,78 @@
+// SPDX-License-Identifier: MIT
+// `ballbar import FILE`: a `ballbar-readings/1` file into a new session (source `imported`), in one
+// transaction. An invalid file is refused whole (exit 2) with its line number and the problem.
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "ballbar/storage/readings.hpp"
+#include "ballbar/storage/readings_file.hpp"
+#include "ballbar/storage/store.hpp"
+#include "command.hpp"
+
+namespace ballbar::app {
+namespace {
+
+struct ImportOptions {
+    std::string file;
+    bool json = false;
+};
+
+std::string mismatch_summary(const storage::ReadingsFile& f) {
+    const auto& m = f.nominal_mismatches;
+    std::string lines;
+    double worst = 0;
+    for (std::size_t i = 0; i < m.size(); ++i) {
+        if (i < 10) lines += (i ? ", " : "") + std::to_string(m[i].line);
+        worst = std::max(worst, std::abs(m[i].file_nominal_mm - m[i].computed_nominal_mm));
+    }
+    if (m.size() > 10) lines += ", …";
+    return std::to_string(m.size()) +
+           " row(s) give a nominal_mm that differs from the length recomputed from the "
+           "machine geometry by more than 0.001 mm (largest " +
+           std::to_string(worst) + " mm; lines " + lines +
+           "): the producer's geometry or conventions may disagree with this file's machine header";
+}
+
+int run_import(const ImportOptions& o, const Globals& globals) {
+    storage::ReadingsFile file;
+    try {
+        file = storage::read_readings_file(o.file);
+    } catch (const storage::ReadingsFileError& e) {
+        throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
+    }
+    for (const auto& w : file.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
+    if (!file.nominal_mismatches.empty()) {
+        std::cerr << "ballbar: warning: " << o.file << ": " << mismatch_summary(file) << '\n';
+    }
+    try {
+        storage::Store store(resolve_db_path(globals));
+        const auto id = storage::import_readings(store, file, o.file);
+        const auto info = store.session(id);
+        if (o.json) {
+            nlohmann::json j = {{"session", id},
+                                {"uuid", info.uuid},
+                                {"readings", file.set.readings.size()},
+                                {"warnings", file.warnings},
+                                {"nominal_mismatches", file.nominal_mismatches.size()}};
+            std::cout << j.dump(2) << '\n';
+        } else {
+            std::cout << "imported " << file.set.readings.size() << " readings from " << o.file << " into session "
+                      << id << " (" << info.uuid << ")\n";
+        }
+        return kExitOk;
+    } catch (const storage::StorageError& e) {
+        throw CliError(kExitFailure, std::string(e.what()) + " (nothing imported)");
+    }
+}
+
+}  // namespace
+}  // namespace ballbar::app
+
+BALLBAR_COMMAND(import) {
+    auto opts = std::make_shared<ballbar::app::ImportOptions>();
+    auto* sub = root.add_subcommand("import", "Import a ballbar-readings/1 file into a new session");
+    sub->add_option("FILE", opts->file, "readings file (shared/formats/readings.md)")->required();
+    sub->add_flag("--json", opts->json, "print the new session as JSON");
+    sub->callback(
+        [opts, &globals] { globals.action = [opts, &globals] { return ballbar::app::run_import(*opts, globals); }; });
+}

@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: MIT
+// `ballbar sessions [--json]` lists the stored sessions; `ballbar sessions show SESSION [--json]` shows
+// one (SESSION: id or uuid prefix) with its audit trail, points summary and results.
+#include <cstdio>
+#include <iostream>
+
+#include "ballbar/storage/session_export.hpp"
+#include "ballbar/storage/store.hpp"
+#include "command.hpp"
+
+namespace ballbar::app {
+namespace {
+
+struct SessionsOptions {
+    bool json = false;
+    std::string session;
+    bool show_json = false;
+};
+
+storage::Store open_reader(const Globals& globals) {
+    storage::StoreOptions so;
+    so.recover = false;  // listing must not touch a running acquisition's session
+    return storage::Store(resolve_db_path(globals), so);
+}
+
+std::string machine_label(const analysis::MachineGeometry& m) {
+    std::string s(analysis::to_string(m.type));
+    if (!m.name.empty()) s += " " + m.name;
+    return s;
+}
+
+int list_sessions(const SessionsOptions& o, const Globals& globals) {
+    auto store = open_reader(globals);
+    if (o.json) {
+        std::cout << storage::sessions_json(store) << '\n';
+        return kExitOk;
+    }
+    const auto sessions = store.sessions();
+    if (sessions.empty()) {
+        std::cout << "no sessions in " << store.path() << '\n';
+        return kExitOk;
+    }
+    std::printf("%5s  %-8s  %-11s  %-8s  %-24s  %-24s  %6s  %9s  %s\n", "id", "uuid", "state", "source", "machine",
+                "started", "points", "samples", "operator");
+    for (const auto& s : sessions) {
+        std::printf("%5lld  %-8s  %-11s  %-8s  %-24s  %-24s  %6lld  %9lld  %s\n", static_cast<long long>(s.id),
+                    s.uuid.substr(0, 8).c_str(), std::string(storage::to_string(s.state)).c_str(),
+                    std::string(storage::to_string(s.source)).c_str(), machine_label(s.machine).c_str(),
+                    s.started_at.c_str(), static_cast<long long>(s.point_count), static_cast<long long>(s.sample_count),
+                    s.operator_name.c_str());
+    }
+    return kExitOk;
+}
+
+int show_session(const SessionsOptions& o, const Globals& globals) {
+    auto store = open_reader(globals);
+    const auto id = store.find_session(o.session);
+    if (o.show_json) {
+        std::cout << storage::session_json(store, id, true) << '\n';
+        return kExitOk;
+    }
+    const auto s = store.session(id);
+    std::cout << "session " << s.id << "  " << s.uuid << '\n'
+              << "  state       " << storage::to_string(s.state) << '\n'
+              << "  source      " << storage::to_string(s.source) << '\n'
+              << "  procedure   " << s.procedure << '\n'
+              << "  operator    " << s.operator_name << '\n'
+              << "  machine     " << machine_label(s.machine) << '\n'
+              << "  started     " << s.started_at << '\n'
+              << "  ended       " << s.ended_at.value_or("-") << '\n';
+    if (s.instrument) {
+        std::cout << "  instrument  " << s.instrument->model << " " << s.instrument->serial;
+        if (s.instrument->calibrated_length_mm) std::cout << " (" << *s.instrument->calibrated_length_mm << " mm)";
+        std::cout << '\n';
+    }
+    if (!s.notes.empty()) std::cout << "  notes       " << s.notes << '\n';
+    std::cout << "  points      " << s.point_count << "\n  samples     " << s.sample_count << "\n  transitions\n";
+    for (const auto& t : store.transitions(id)) {
+        std::cout << "    " << t.at << "  " << (t.from ? std::string(storage::to_string(*t.from)) : std::string("-"))
+                  << " -> " << storage::to_string(t.to) << "  (" << t.event << ")\n";
+    }
+    const auto results = store.results(id);
+    if (!results.empty()) std::cout << "  results\n";
+    for (const auto& r : results) {
+        std::cout << "    #" << r.id << "  " << r.kind << "  " << r.created_at;
+        if (r.model_id) std::cout << "  model " << *r.model_id;
+        if (!r.producer.empty()) std::cout << "  by " << r.producer;
+        std::cout << '\n';
+    }
+    return kExitOk;
+}
+
+int run(const SessionsOptions& o, const Globals& globals, bool show) {
+    try {
+        return show ? show_session(o, globals) : list_sessions(o, globals);
+    } catch (const storage::StorageError& e) {
+        const bool usage = e.kind() == storage::StorageError::Kind::not_found ||
+                           (e.kind() == storage::StorageError::Kind::invalid &&
+                            std::string(e.what()).find("ambiguous") != std::string::npos);
+        throw CliError(usage ? kExitUsage : kExitFailure, e.what());
+    }
+}
+
+}  // namespace
+}  // namespace ballbar::app
+
+BALLBAR_COMMAND(sessions) {
+    auto opts = std::make_shared<ballbar::app::SessionsOptions>();
+    auto* sub = root.add_subcommand("sessions", "List stored sessions, or show one");
+    sub->add_flag("--json", opts->json, "as JSON");
+    auto* show = sub->add_subcommand("show", "Show one session: metadata, audit trail, results");
+    show->add_option("SESSION", opts->session, "session id or uuid prefix")->required();
+    show->add_flag("--json", opts->show_json, "the whole session as JSON (as `export --format json`)");
+    sub->callback([opts, show, &globals] {
+        const bool is_show = show->parsed();
+        globals.action = [opts, is_show, &globals] { return ballbar::app::run(*opts, globals, is_show); };
+    });
+}
