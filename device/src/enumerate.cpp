@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 namespace ballbar::device {
 namespace {
@@ -39,6 +40,8 @@ void sort_from(std::vector<FoundInstrument>& v, std::size_t first) {
 void enumerate_serial(Enumeration& out) {
     sp_port** ports = nullptr;
     if (sp_list_ports(&ports) != SP_OK) {
+        std::error_code ec;
+        if (!std::filesystem::exists("/sys/class/tty", ec)) return;  // no ttys at all (containers)
         char* msg = sp_last_error_message();
         out.warnings.push_back(std::string("cannot list serial ports: ") + (msg ? msg : "?"));
         sp_free_error_message(msg);
