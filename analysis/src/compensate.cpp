@@ -131,10 +131,8 @@ Compensator::Compensator(const MachineGeometry& geom, const ErrorParams& e, Comp
     if (options_.max_iterations < 1) throw AnalysisError("compensation: max_iterations must be at least 1");
 }
 
-std::array<double, 5> Compensator::step(const Pose& u, const MachineModel::Trig& tr, const Vec3& dw, const Vec3& dq,
-                                        int& suppressed) const {
-    // Nominal Jacobian at u: the table rotation, the tool ball and axis (machine frame), and each rotary
-    // axis's current line. A table axis turns the workpiece under the tool (sign −), a head axis the tool.
+Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& tr) const {
+    // A table axis turns the workpiece under the tool (sign −), a head axis turns the tool (sign +).
     const MachineGeometry& g = nominal_.geometry();
     Mat3 rx, r2;
     rx << 1, 0, 0, 0, tr.c1, -tr.s1, 0, tr.s1, tr.c1;
@@ -142,39 +140,48 @@ std::array<double, 5> Compensator::step(const Pose& u, const MachineModel::Trig&
         r2 << tr.c2, -tr.s2, 0, tr.s2, tr.c2, 0, 0, 0, 1;  // Rz(C)
     else
         r2 << tr.c2, 0, tr.s2, 0, 1, 0, -tr.s2, 0, tr.c2;  // Ry(B)
-    Mat3 rt = Mat3::Identity();
-    Vec3 ball = u.linear_mm();
-    Vec3 dir = Vec3::UnitZ();
+    Frame f;
+    f.rt = Mat3::Identity();
+    f.t = Vec3::Zero();
+    f.ball = u.linear_mm();
+    f.dir = Vec3::UnitZ();
     struct Line {
         Vec3 k, p;
         double sign;
     } lines[2];
     switch (g.type) {
         case MachineType::TTTRR:
-            rt = rx * r2;
-            ball += g.tool_ball_mm;
+            f.rt = rx * r2;
+            f.t = g.a_pivot_mm + rx * g.c_offset_mm;
+            f.ball += g.tool_ball_mm;
             lines[0] = {Vec3::UnitX(), g.a_pivot_mm, -1};
-            lines[1] = {rx * Vec3::UnitZ(), g.a_pivot_mm + rx * g.c_offset_mm, -1};
+            lines[1] = {rx.col(2), f.t, -1};
             break;
         case MachineType::RRTTT:
-            dir = rx * r2.col(2);
-            ball += rx * (r2 * g.tool_ball_mm);
+            f.dir = rx * r2.col(2);
+            f.ball += rx * (r2 * g.tool_ball_mm);
             lines[0] = {Vec3::UnitX(), u.linear_mm(), 1};
-            lines[1] = {rx * Vec3::UnitY(), u.linear_mm(), 1};
+            lines[1] = {rx.col(1), u.linear_mm(), 1};
             break;
         case MachineType::RTTTR:
-            rt = rx;
-            dir = r2.col(2);
-            ball += r2 * g.tool_ball_mm;
+            f.rt = rx;
+            f.t = g.a_pivot_mm;
+            f.dir = r2.col(2);
+            f.ball += r2 * g.tool_ball_mm;
             lines[0] = {Vec3::UnitX(), g.a_pivot_mm, -1};
             lines[1] = {Vec3::UnitY(), u.linear_mm(), 1};
             break;
     }
-    Vec3 cw[2], cq[2];
     for (int j = 0; j < 2; ++j) {
-        cw[j] = lines[j].sign * (rt.transpose() * lines[j].k.cross(ball - lines[j].p));
-        cq[j] = lines[j].sign * (rt.transpose() * lines[j].k.cross(dir));
+        f.cw[j] = lines[j].sign * (f.rt.transpose() * lines[j].k.cross(f.ball - lines[j].p));
+        f.cq[j] = lines[j].sign * (f.rt.transpose() * lines[j].k.cross(f.dir));
     }
+    return f;
+}
+
+std::array<double, 5> Compensator::step(const Frame& f, const Vec3& dw, const Vec3& dq, int& suppressed) const {
+    const Vec3* cq = f.cq;
+    const Vec3* cw = f.cw;
     if (suppressed < 0) {
         // |cq| = |sin| of the angle between the axis and the tool axis.
         if (cq[1].norm() < options_.singular_tolerance)
@@ -194,17 +201,18 @@ std::array<double, 5> Compensator::step(const Pose& u, const MachineModel::Trig&
         d1 = (n22 * b1 - n12 * b2) / det;
         d2 = (n11 * b2 - n12 * b1) / det;
     }
-    const Vec3 dp = rt * (dw - cw[0] * d1 - cw[1] * d2);
+    const Vec3 dp = f.rt * (dw - cw[0] * d1 - cw[1] * d2);
     return {dp.x(), dp.y(), dp.z(), d1, d2};
 }
 
 Correction Compensator::first_order(const Pose& u) const {
     const MachineModel::Trig tr = MachineModel::trig(nominal_.geometry().type, u);
-    const ToolPose want = nominal_.tool_pose(u, tr);
+    const Frame f = frame(u, tr);
+    const ToolPose want = f.tool_pose();
     const ToolPose got = actual_.tool_pose(u, tr);
     Correction c;
     int suppressed = -1;
-    c.du = step(u, tr, want.position_mm - got.position_mm, want.direction - got.direction, suppressed);
+    c.du = step(f, want.position_mm - got.position_mm, want.direction - got.direction, suppressed);
     c.singular = suppressed >= 0;
     c.suppressed_axis = suppressed;
     c.commanded = add_correction(nominal_.geometry().type, u, c.du);
@@ -226,7 +234,7 @@ Correction Compensator::exact(const Pose& u) const {
         c.position_error_mm = dw.norm();
         c.direction_error_rad = angle_between(want.direction, got.direction);
         if (c.iterations == options_.max_iterations) break;
-        const std::array<double, 5> inc = step(cur, MachineModel::trig(type, cur), dw, dq, suppressed);
+        const std::array<double, 5> inc = step(frame(cur, MachineModel::trig(type, cur)), dw, dq, suppressed);
         const bool direction_done = suppressed >= 0 ? std::abs(inc[3]) + std::abs(inc[4]) <= options_.tolerance_rad
                                                     : c.direction_error_rad <= options_.tolerance_rad;
         if (c.position_error_mm <= options_.tolerance_mm && direction_done) {

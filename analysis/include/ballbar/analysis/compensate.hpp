@@ -93,9 +93,17 @@ class Compensator {
     const CompensationOptions& options() const { return options_; }
 
   private:
-    // One linearised step: du from the pose error dv (intended − actual) at u; `suppress` forced axis.
-    std::array<double, 5> step(const Pose& u, const MachineModel::Trig& t, const Vec3& dw, const Vec3& dq,
-                               int& suppressed) const;
+    // The nominal machine at u: table rotation and origin, tool ball and axis (machine frame), and the
+    // Jacobian columns of the two rotary axes (position cw, direction cq; table frame).
+    struct Frame {
+        Mat3 rt;
+        Vec3 t, ball, dir;
+        Vec3 cw[2], cq[2];
+        ToolPose tool_pose() const { return {rt.transpose() * (ball - t), rt.transpose() * dir}; }
+    };
+    Frame frame(const Pose& u, const MachineModel::Trig& t) const;
+    // One linearised step: du from the pose error (intended − actual); `suppressed` chosen once, then kept.
+    std::array<double, 5> step(const Frame& f, const Vec3& dw, const Vec3& dq, int& suppressed) const;
 
     MachineModel nominal_, actual_;
     CompensationOptions options_;
