@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ballbar/device/enumerate.hpp"
+#include "ballbar/device/uri.hpp"
 #include "fake_hid_device.hpp"
 #include "fake_usb_device.hpp"
 
@@ -101,6 +102,7 @@ class Enumerate : public ::testing::Test {
 TEST_F(Enumerate, NothingAttachedIsAnEmptyList) {
     const auto e = enumerate_instruments();
     EXPECT_TRUE(e.instruments.empty());
+    EXPECT_TRUE(e.warnings.empty()) << e.warnings.front();  // an empty machine is not a problem
 }
 
 TEST_F(Enumerate, FindsOneInstrumentPerLink) {
@@ -124,6 +126,19 @@ TEST_F(Enumerate, FindsOneInstrumentPerLink) {
     EXPECT_EQ(h.path, "/dev/hidraw0");
     EXPECT_EQ(h.uri, "hid:1209:0002:BB0002");
     EXPECT_EQ(h.serial, "BB0002");
+}
+
+TEST_F(Enumerate, ListedUrisOpenThroughTheUriFactory) {
+    plug_all();
+    const auto e = enumerate_instruments();
+    int opened = 0;
+    for (const auto& f : e.instruments) {
+        if (f.link == UsbLink::Serial) continue;  // a bare sysfs tty here, nothing to talk to
+        auto t = open_transport(f.uri);
+        EXPECT_EQ(t->uri(), f.uri);
+        ++opened;
+    }
+    EXPECT_EQ(opened, 2);
 }
 
 std::pair<int, std::string> run(const std::string& cmd) {
