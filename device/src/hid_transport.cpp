@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <climits>
 #include <cstring>
@@ -136,7 +137,7 @@ class HidTransport final : public Transport {
     std::string uri_;
     std::vector<std::uint8_t> pending_;
     std::size_t pos_ = 0;
-    bool gone_ = false;
+    std::atomic<bool> gone_{false};  // set by the reader or the writer thread
 };
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <libusb-1.0/libusb.h>
 
 #include <algorithm>
+#include <atomic>
 #include <climits>
 #include <cstring>
 #include <vector>
@@ -173,7 +174,7 @@ class UsbTransport final : public Transport {
     std::vector<std::uint8_t> in_buf_;
     std::size_t in_pos_ = 0;
     std::size_t in_len_ = 0;
-    bool gone_ = false;
+    std::atomic<bool> gone_{false};  // set by the reader or the writer thread
 };
 
 struct ContextGuard {
