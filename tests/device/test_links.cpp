@@ -141,6 +141,14 @@ TEST(TcpLink, StreamsDisconnectsAndReconnects) {
         EmulatorHost host(emu, opt);
         host.run_tcp(listener);
     });
+    struct Joiner {
+        std::atomic<bool>& stop;
+        std::thread& thread;
+        ~Joiner() {
+            stop = true;
+            thread.join();
+        }
+    } joiner{stop, server};
     const std::string uri = "tcp:127.0.0.1:" + std::to_string(listener.port());
     {
         Instrument inst(open_transport(uri));
@@ -160,7 +168,7 @@ TEST(TcpLink, StreamsDisconnectsAndReconnects) {
     for (int i = 0; i < 100 && !inst2; ++i) {
         try {
             auto t = open_transport(uri);
-            auto candidate = std::make_unique<Instrument>(std::move(t), InstrumentOptions{.reply_timeout = 200ms});
+            auto candidate = std::make_unique<Instrument>(std::move(t), InstrumentOptions{.reply_timeout = 1000ms});
             candidate->identify();
             inst2 = std::move(candidate);
         } catch (const DeviceError&) {
@@ -172,9 +180,6 @@ TEST(TcpLink, StreamsDisconnectsAndReconnects) {
     std::vector<analysis::BarSample> s;
     EXPECT_EQ(stream(*inst2, 20000, s), 20000u);
     EXPECT_EQ(inst2->stats().lost_frames, 0u);
-    inst2.reset();
-    stop = true;
-    server.join();
 }
 
 TEST(TcpLink, RefusedConnectionIsNotFound) {

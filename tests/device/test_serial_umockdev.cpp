@@ -90,7 +90,9 @@ class FakeAcm {
     }
     void unplug() {
         namespace fs = std::filesystem;
-        const fs::path dev = fs::path(umockdev_testbed_get_root_dir(tb_)) / "dev";
+        gchar* root = umockdev_testbed_get_root_dir(tb_);  // transfer full
+        const fs::path dev = fs::path(root) / "dev";
+        g_free(root);
         std::error_code ec;
         std::string ptymap_key = fs::read_symlink(dev / tty_name(generation_), ec).string();
         for (auto& c : ptymap_key) c = c == '/' ? '_' : c;
