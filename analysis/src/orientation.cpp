@@ -11,6 +11,7 @@ namespace ballbar::analysis {
 namespace {
 
 constexpr double kTol = kOrientationSingularTol;
+constexpr double kMinLever_mm = 1e-6;  // a tool ball closer than 1 nm to its pivot is "at the pivot"
 
 double wrap(double a) {
     return std::remainder(a, 2.0 * kPi);
@@ -58,7 +59,7 @@ OrientationSolution solve_orientation(const RrtttInput& in) {
 
     OrientationSolution out;
     out.nominal_after_mm = p2;
-    if (in.z_r_mm == 0.0) {
+    if (std::abs(in.z_r_mm) < kMinLever_mm) {
         out.singular = "z_r = 0: the tool ball is at the pivot, no rotation moves it";
         return out;
     }
@@ -106,7 +107,7 @@ OrientationSolution solve_orientation(const RtttrSpindleInput& in) {
 
     OrientationSolution out;
     out.nominal_after_mm = p2;
-    if (in.z_r_mm == 0.0) {
+    if (std::abs(in.z_r_mm) < kMinLever_mm) {
         out.singular = "z_r = 0: the tool ball is at the pivot, no rotation moves it";
         return out;
     }
