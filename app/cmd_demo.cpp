@@ -34,7 +34,7 @@ namespace {
 
 namespace acq = ballbar::acquisition;
 namespace ba = ballbar::analysis;
-using nlohmann::json;
+using json = nlohmann::ordered_json;
 
 struct DemoOptions {
     std::string machine = "TTTRR";
@@ -159,7 +159,10 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     cfg.machine.start = plan.points.front().pose;
     PtyEmulator emulator(cfg);
 
-    storage::Store store(resolve_db_path(globals));
+    // A killed demo loses at most its last batch; the demo does not need an fsync per commit.
+    storage::StoreOptions so;
+    so.sync_full = false;
+    storage::Store store(resolve_db_path(globals), so);
     storage::NewSession ns;
     ns.machine = machine.geometry;
     ns.source = storage::SessionSource::emulator;
@@ -200,7 +203,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     std::vector<acq::LocationResult> locs;
     for (const auto& r : store.results(id))
         if (r.kind == "ssm") {
-            const json j = json::parse(r.payload_json);
+            const auto j = nlohmann::json::parse(r.payload_json);
             acq::LocationResult l;
             l.test = j.at("test");
             l.step = j.at("step");
@@ -231,6 +234,18 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     }
     out["samples"] = sum.samples;
 
+    int code = kExitOk;
+#ifdef BALLBAR_HAVE_COMPENSATION_DEMO
+    CompensationDemoOptions co;
+    co.seed = o.seed;
+    if (o.compensate && o.json) {
+        std::ostringstream ss;
+        code = run_compensation_demo(co, ss, true);
+        out["compensation"] = json::parse(ss.str());
+    }
+#else
+    if (o.compensate) throw CliError(kExitFailure, "--compensate: this build has no compensation demo");
+#endif
     if (o.json) {
         std::cout << out.dump() << std::endl;
     } else {
@@ -257,11 +272,12 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
                     sum.samples);
     }
 #ifdef BALLBAR_HAVE_COMPENSATION_DEMO
-    if (o.compensate) return run_compensation_demo(store, id, *type, o.seed, o.json);
-#else
-    if (o.compensate) throw CliError(kExitFailure, "--compensate: this build has no compensation demo");
+    if (o.compensate && !o.json) {
+        std::cout << "\n";
+        code = run_compensation_demo(co, std::cout, false);
+    }
 #endif
-    return kExitOk;
+    return code;
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "acquisition_adapters.hpp"
+#include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
@@ -29,6 +30,7 @@ struct MeasureOptions {
     std::string resume;
     std::string program_file;
     bool non_interactive = false;
+    bool dry_run = false;
 };
 
 std::string read_file(const std::string& path, const char* what) {
@@ -82,7 +84,33 @@ void print_results(std::ostream& out, const acq::SessionSummary& sum) {
     }
 }
 
+/// --dry-run: plan, check and write the NC program; no instrument, no database.
+int dry_run(const MeasureOptions& o) {
+    if (o.machine_file.empty()) throw CliError(kExitUsage, "--machine FILE is required");
+    try {
+        const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
+        const acq::PlanSpec spec =
+            o.plan_file.empty() ? acq::default_plan(machine)
+                                : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
+        const acq::Plan plan = acq::make_plan(machine, spec);
+        const std::string text = acq::write_plan_program(plan);
+        if (o.program_file.empty()) {
+            std::cout << text;
+            return kExitOk;
+        }
+        std::ofstream f(o.program_file);
+        f << text;
+        if (!f) throw CliError(kExitFailure, "cannot write " + o.program_file);
+        std::cout << "Plan checked: " << plan.test_count() << " tests, " << plan.points.size()
+                  << " points within the travel; NC program written to " << o.program_file << "\n";
+        return kExitOk;
+    } catch (const acq::PlanError& e) {
+        throw CliError(kExitUsage, e.what());
+    }
+}
+
 int run_measure(const MeasureOptions& o, const Globals& globals) {
+    if (o.dry_run) return dry_run(o);
     storage::Store store(resolve_db_path(globals));
     std::int64_t id = 0;
     acq::Plan plan;
@@ -154,13 +182,13 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
 BALLBAR_COMMAND(measure) {
     auto* sub = root.add_subcommand("measure", "Guided two-step SSM measurement (RRTTT, TTTRR, RTTTR)");
     auto o = std::make_shared<MeasureOptions>();
-    sub->add_option("--device", o->device, "Instrument URI (serial:PATH, tcp:HOST:PORT, usb:VID:PID, emulator:CONFIG)")
-        ->required();
+    sub->add_option("--device", o->device, "Instrument URI (serial:PATH, tcp:HOST:PORT, usb:VID:PID, emulator:CONFIG)");
     sub->add_option("--machine", o->machine_file, "Machine file (ballbar-machine/1 JSON)");
     sub->add_option("--plan", o->plan_file, "Plan file (ballbar-plan/1 JSON); default: four tests at one socket");
     sub->add_option("--operator", o->operator_name, "Operator name stored with the session");
     sub->add_option("--resume", o->resume, "Continue an interrupted session (id or uuid prefix)");
     sub->add_option("--program", o->program_file, "Where to write the NC program (default ballbar-session-ID.nc)");
+    sub->add_flag("--dry-run", o->dry_run, "Check the plan and write the NC program (stdout or --program) only");
     sub->add_flag("--non-interactive", o->non_interactive, "Take every answer from the plan file");
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_measure(*o, globals); }; });
 }

@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: MIT
+// `ballbar demo` end to end: the emulator on a pty, the serial transport, the driver, the guided
+// procedure, the database. For each machine type the measured total position errors must match the
+// emulator's true ones within 1 µm and the orientation errors within 2 arc-seconds (0.1 µm bar noise).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+struct DemoRun {
+    int status = -1;
+    std::string out;
+};
+
+DemoRun run(const std::string& args) {
+    DemoRun r;
+    const std::string cmd = std::string(BALLBAR_EXE) + " " + args + " 2>/dev/null";
+    FILE* p = ::popen(cmd.c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf{};
+    std::size_t n;
+    while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+    const int st = ::pclose(p);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return r;
+}
+
+std::filesystem::path temp_db(const std::string& name) {
+    const auto dir = std::filesystem::temp_directory_path() / ("ballbar-demo-test-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const auto db = dir / name;
+    std::filesystem::remove(db);
+    return db;
+}
+
+constexpr double kPositionTol_mm = 0.001;
+constexpr double kAngleTol_rad = 2.0 / 3600.0 * 3.141592653589793 / 180.0;
+
+class Demo : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(Demo, RecoversTheEmulatorsErrorsThroughThePty) {
+    const std::string type = GetParam();
+    const auto db = temp_db(type + ".db");
+    const DemoRun r = run("--db " + db.string() + " demo --json --seed 3 --machine " + type);
+    ASSERT_EQ(r.status, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j.at("machine"), type);
+    EXPECT_GE(j.at("session").get<int>(), 1);
+    ASSERT_EQ(j.at("locations").size(), 8u);  // four tests, two steps
+    for (const auto& l : j.at("locations")) {
+        double d2 = 0, t2 = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double d = l.at("measured_mm")[k].get<double>() - l.at("true_mm")[k].get<double>();
+            d2 += d * d;
+            t2 += std::pow(l.at("true_mm")[k].get<double>(), 2);
+        }
+        EXPECT_LT(std::sqrt(d2), kPositionTol_mm) << l.dump();
+        EXPECT_GT(std::sqrt(t2), 0.005) << "errors are injected: " << l.dump();
+    }
+    ASSERT_EQ(j.at("orientation").size(), 4u);
+    for (const auto& o : j.at("orientation")) {
+        ASSERT_TRUE(o.at("measured_rad").is_object()) << o.dump();
+        for (const auto& [k, v] : o.at("true_rad").items()) {
+            EXPECT_NEAR(o.at("measured_rad").at(k).get<double>(), v.get<double>(), kAngleTol_rad)
+                << k << " " << o.dump();
+        }
+    }
+    // The session is stored: a second demo gets the next id.
+    const DemoRun again = run("--db " + db.string() + " demo --json --seed 3 --machine " + type);
+    ASSERT_EQ(again.status, 0);
+    EXPECT_EQ(nlohmann::json::parse(again.out).at("session").get<int>(), j.at("session").get<int>() + 1);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllTypes, Demo, ::testing::Values("RRTTT", "TTTRR", "RTTTR"));
+
+TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {
+    const auto db = temp_db("human.db");
+    const DemoRun r = run("--db " + db.string() + " demo");
+    ASSERT_EQ(r.status, 0) << r.out;
+    EXPECT_NE(r.out.find("measured"), std::string::npos);
+    EXPECT_NE(r.out.find("true"), std::string::npos);
+    EXPECT_NE(r.out.find("TTTRR"), std::string::npos);
+    EXPECT_EQ(r.out.find("\033["), std::string::npos) << "no colour when stdout is not a terminal";
+}
+
+TEST(Demo, RejectsAnUnknownMachineType) {
+    const DemoRun r = run("demo --machine XYZAB");
+    EXPECT_EQ(r.status, 2);
+}
+
+}  // namespace

@@ -1,0 +1,170 @@
+// SPDX-License-Identifier: MIT
+// `ballbar measure` driven like an operator would: through a pseudo-terminal (forkpty), answering the
+// prompts as they appear, against the emulator in real time (a one-test plan, about ten seconds).
+// Also the dry run (plan check and NC program) and the refusal of a plan outside the travel.
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <pty.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+const fs::path kData = fs::path(BALLBAR_TEST_DATA_DIR) / "machines";
+
+fs::path temp_dir() {
+    const auto dir = fs::temp_directory_path() / ("ballbar-measure-test-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string slurp(const fs::path& p) {
+    std::ifstream f(p);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+int run(const std::string& args, std::string* out = nullptr) {
+    const std::string cmd = std::string(BALLBAR_EXE) + " " + args + " 2>&1";
+    FILE* p = ::popen(cmd.c_str(), "r");
+    std::array<char, 4096> buf{};
+    std::size_t n;
+    std::string text;
+    while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) text.append(buf.data(), n);
+    const int st = ::pclose(p);
+    if (out) *out = text;
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+/// The emulator's configuration with the plan's NC program (run from power-on).
+fs::path emulator_config(const fs::path& dir) {
+    std::string out;
+    const fs::path prog = dir / "plan.nc";
+    EXPECT_EQ(run("measure --dry-run --machine " + (kData / "tttrr.json").string() + " --plan " +
+                      (kData / "tttrr-quick.plan.json").string() + " --program " + prog.string(),
+                  &out),
+              0)
+        << out;
+    std::string cfg = slurp(kData / "tttrr-emulator.json");
+    cfg.replace(cfg.find("PROGRAM"), 7, prog.string());
+    const fs::path path = dir / "emulator.json";
+    std::ofstream(path) << cfg;
+    return path;
+}
+
+TEST(CliMeasure, DryRunChecksThePlanAndWritesTheProgram) {
+    std::string out;
+    ASSERT_EQ(run("measure --dry-run --machine " + (kData / "rrttt.json").string(), &out), 0) << out;
+    EXPECT_NE(out.find("G90"), std::string::npos);
+    EXPECT_NE(out.find("G4 P"), std::string::npos);
+    EXPECT_NE(out.find(" B"), std::string::npos);  // RRTTT turns A and B
+    const fs::path bad = temp_dir() / "narrow.json";
+    std::string m = slurp(kData / "tttrr.json");
+    m.replace(m.find("\"A_deg\": [-30, 120]"), 19, "\"A_deg\": [-5, 5]");
+    std::ofstream(bad) << m;
+    EXPECT_EQ(
+        run("measure --dry-run --machine " + bad.string() + " --plan " + (kData / "tttrr-table2.plan.json").string(),
+            &out),
+        2);
+    EXPECT_NE(out.find("A = 15"), std::string::npos) << out;
+    EXPECT_NE(out.find("travel"), std::string::npos) << out;
+}
+
+TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
+    const fs::path dir = temp_dir();
+    const fs::path cfg = emulator_config(dir);
+    const fs::path db = dir / "interactive.db";
+    fs::remove(db);
+    const std::string exe = BALLBAR_EXE;
+    const std::string machine = (kData / "tttrr.json").string();
+    const std::string plan = (kData / "tttrr-quick.plan.json").string();
+    const std::string prog = (dir / "session.nc").string();
+    const std::string device = "emulator:" + cfg.string();
+
+    int master = -1;
+    const pid_t pid = ::forkpty(&master, nullptr, nullptr, nullptr);
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        ::unsetenv("NO_COLOR");
+        ::execl(exe.c_str(), exe.c_str(), "--db", db.c_str(), "measure", "--device", device.c_str(), "--machine",
+                machine.c_str(), "--plan", plan.c_str(), "--operator", "tester", "--program", prog.c_str(),
+                static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    std::string screen;
+    std::size_t answered = 0;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(90);
+    for (;;) {
+        pollfd pfd{master, POLLIN, 0};
+        if (::poll(&pfd, 1, 200) > 0) {
+            std::array<char, 4096> buf{};
+            const ssize_t n = ::read(master, buf.data(), buf.size());
+            if (n <= 0) break;  // the child closed the terminal
+            screen.append(buf.data(), static_cast<std::size_t>(n));
+        }
+        // Answer each new "[Y/n]" prompt with yes.
+        std::size_t prompts = 0;
+        for (std::size_t at = screen.find("[Y/n]"); at != std::string::npos; at = screen.find("[Y/n]", at + 1))
+            ++prompts;
+        while (answered < prompts) {
+            ASSERT_EQ(::write(master, "y\n", 2), 2);
+            ++answered;
+        }
+        if (std::chrono::steady_clock::now() > deadline) {
+            ::kill(pid, SIGKILL);
+            break;
+        }
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ::close(master);
+    ASSERT_TRUE(WIFEXITED(status)) << screen;
+    EXPECT_EQ(WEXITSTATUS(status), 0) << screen;
+    EXPECT_GE(answered, 3u) << screen;  // reference, set-up, accept
+    EXPECT_NE(screen.find("calibrator"), std::string::npos) << screen;
+    EXPECT_NE(screen.find("Start the NC program"), std::string::npos) << screen;
+    EXPECT_NE(screen.find("] 3/6"), std::string::npos) << "progress bar: " << screen;
+    EXPECT_NE(screen.find("bar "), std::string::npos) << "live bar reading: " << screen;
+    EXPECT_NE(screen.find(" µm)"), std::string::npos) << "live bar reading: " << screen;
+    EXPECT_NE(screen.find("\033["), std::string::npos) << "colour on a terminal";
+    EXPECT_NE(screen.find("completed"), std::string::npos) << screen;
+    EXPECT_NE(screen.find("orientation (exact)"), std::string::npos) << screen;
+    EXPECT_TRUE(fs::exists(prog));
+}
+
+TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
+    const fs::path dir = temp_dir();
+    const fs::path cfg = emulator_config(dir);
+    const fs::path db = dir / "batch.db";
+    fs::remove(db);
+    std::string out;
+    const int code = run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
+                             " --machine " + (kData / "tttrr.json").string() + " --plan " +
+                             (kData / "tttrr-quick.plan.json").string() + " --program " + (dir / "b.nc").string(),
+                         &out);
+    EXPECT_EQ(code, 0) << out;
+    EXPECT_NE(out.find("[plan: yes]"), std::string::npos) << out;
+    EXPECT_NE(out.find("captured 5/6"), std::string::npos) << out;
+    EXPECT_NE(out.find("completed"), std::string::npos) << out;
+    EXPECT_EQ(out.find("\033["), std::string::npos) << "no colour in a pipe";
+    // Nothing left to resume: a completed session is refused.
+    std::regex id_re("Session ([0-9]+)");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(out, m, id_re)) << out;
+    EXPECT_NE(run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
+                  " --resume " + m[1].str()),
+              0);
+}
+
+}  // namespace
