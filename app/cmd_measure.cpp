@@ -31,6 +31,7 @@ struct MeasureOptions {
     std::string program_file;
     bool non_interactive = false;
     bool dry_run = false;
+    std::size_t from_point = 0;
 };
 
 std::string read_file(const std::string& path, const char* what) {
@@ -93,7 +94,10 @@ int dry_run(const MeasureOptions& o) {
             o.plan_file.empty() ? acq::default_plan(machine)
                                 : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
         const acq::Plan plan = acq::make_plan(machine, spec);
-        const std::string text = acq::write_plan_program(plan);
+        if (o.from_point >= plan.points.size())
+            throw CliError(kExitUsage, "--from-point " + std::to_string(o.from_point) + ": the plan has " +
+                                           std::to_string(plan.points.size()) + " points");
+        const std::string text = acq::write_plan_program(plan, o.from_point);
         if (o.program_file.empty()) {
             std::cout << text;
             return kExitOk;
@@ -189,6 +193,7 @@ BALLBAR_COMMAND(measure) {
     sub->add_option("--resume", o->resume, "Continue an interrupted session (id or uuid prefix)");
     sub->add_option("--program", o->program_file, "Where to write the NC program (default ballbar-session-ID.nc)");
     sub->add_flag("--dry-run", o->dry_run, "Check the plan and write the NC program (stdout or --program) only");
+    sub->add_option("--from-point", o->from_point, "With --dry-run: the program from this point (0-based) on");
     sub->add_flag("--non-interactive", o->non_interactive, "Take every answer from the plan file");
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_measure(*o, globals); }; });
 }

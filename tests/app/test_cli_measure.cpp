@@ -10,6 +10,7 @@
 
 #include <array>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -47,18 +48,19 @@ int run(const std::string& args, std::string* out = nullptr) {
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
-/// The emulator's configuration with the plan's NC program (run from power-on).
-fs::path emulator_config(const fs::path& dir) {
+/// The emulator's configuration with the plan's NC program from `from_point` (run from power-on).
+fs::path emulator_config(const fs::path& dir, std::size_t from_point = 0) {
     std::string out;
-    const fs::path prog = dir / "plan.nc";
+    const fs::path prog = dir / ("plan-" + std::to_string(from_point) + ".nc");
     EXPECT_EQ(run("measure --dry-run --machine " + (kData / "tttrr.json").string() + " --plan " +
-                      (kData / "tttrr-quick.plan.json").string() + " --program " + prog.string(),
+                      (kData / "tttrr-quick.plan.json").string() + " --program " + prog.string() + " --from-point " +
+                      std::to_string(from_point),
                   &out),
               0)
         << out;
     std::string cfg = slurp(kData / "tttrr-emulator.json");
     cfg.replace(cfg.find("PROGRAM"), 7, prog.string());
-    const fs::path path = dir / "emulator.json";
+    const fs::path path = dir / ("emulator-" + std::to_string(from_point) + ".json");
     std::ofstream(path) << cfg;
     return path;
 }
@@ -165,6 +167,56 @@ TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
     EXPECT_NE(run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
                   " --resume " + m[1].str()),
               0);
+}
+
+TEST(CliMeasure, KilledSessionResumesAfterItsLastPoint) {
+    const fs::path dir = temp_dir();
+    const fs::path db = dir / "killed.db";
+    fs::remove(db);
+    const std::string exe = BALLBAR_EXE;
+    const std::string machine = (kData / "tttrr.json").string();
+    const std::string plan = (kData / "tttrr-quick.plan.json").string();
+    const std::string device = "emulator:" + emulator_config(dir).string();
+    const std::string prog = (dir / "k.nc").string();
+    int pipefd[2];
+    ASSERT_EQ(::pipe(pipefd), 0);
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        ::dup2(pipefd[1], STDOUT_FILENO);
+        ::close(pipefd[0]);
+        ::execl(exe.c_str(), exe.c_str(), "--db", db.c_str(), "measure", "--non-interactive", "--device",
+                device.c_str(), "--machine", machine.c_str(), "--plan", plan.c_str(), "--program", prog.c_str(),
+                static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    ::close(pipefd[1]);
+    std::string out;
+    std::array<char, 1024> buf{};
+    while (out.find("captured 3/6") == std::string::npos) {
+        const ssize_t n = ::read(pipefd[0], buf.data(), buf.size());
+        if (n <= 0) break;
+        out.append(buf.data(), static_cast<std::size_t>(n));
+    }
+    ::kill(pid, SIGKILL);  // three points stored, the fourth a second away
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ::close(pipefd[0]);
+    ASSERT_NE(out.find("captured 3/6"), std::string::npos) << out;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(out, m, std::regex("Session ([0-9]+)"))) << out;
+
+    // The machine runs the program from the fourth point; the session continues there.
+    const std::string resumed_device = "emulator:" + emulator_config(dir, 3).string();
+    std::string out2;
+    const int code = run("--db " + db.string() + " measure --non-interactive --device " + resumed_device +
+                             " --resume " + m[1].str() + " --program " + (dir / "k2.nc").string(),
+                         &out2);
+    EXPECT_EQ(code, 0) << out2;
+    EXPECT_NE(out2.find("resumed after 3 points"), std::string::npos) << out2;
+    EXPECT_NE(out2.find("from test 1 step 2 point 1"), std::string::npos) << out2;
+    EXPECT_NE(out2.find("completed"), std::string::npos) << out2;
+    EXPECT_NE(out2.find("orientation (exact)"), std::string::npos) << out2;
 }
 
 }  // namespace
