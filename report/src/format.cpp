@@ -20,9 +20,15 @@ std::string fixed(const std::optional<double>& v, int decimals, const std::strin
     return v ? fixed(*v, decimals) : missing;
 }
 
+int uncertainty_decimals(double u, int decimals) {
+    u = std::abs(u);
+    while (u > 0 && decimals < 4 && u < 0.5 * std::pow(10.0, -decimals)) ++decimals;
+    return decimals;
+}
+
 std::string plus_minus(double v, const std::optional<double>& u, int decimals) {
     if (!u || !std::isfinite(*u)) return fixed(v, decimals);
-    return fixed(v, decimals) + " ± " + fixed(std::abs(*u), decimals);
+    return fixed(v, decimals) + " ± " + fixed(std::abs(*u), uncertainty_decimals(*u, decimals));
 }
 
 std::string degrees(const std::optional<double>& rad) {

@@ -15,7 +15,10 @@ inline constexpr int kArcsecDecimals = 1;  ///< arcseconds
 /// Fixed point; "-0.00" becomes "0.00"; non-finite values become "n/a".
 std::string fixed(double v, int decimals);
 std::string fixed(const std::optional<double>& v, int decimals, const std::string& missing = "–");
-/// "v ± u" (or just "v" without an uncertainty).
+/// Decimals of an uncertainty shown next to a value with `decimals`: one more while it would round to
+/// zero (down to 4), so that "± 0.00" never hides a small but known uncertainty.
+int uncertainty_decimals(double u, int decimals);
+/// "v ± u" (or just "v" without an uncertainty); u with uncertainty_decimals().
 std::string plus_minus(double v, const std::optional<double>& u, int decimals);
 /// An angle given in radians, shown in degrees / arcseconds with the unit sign.
 std::string degrees(const std::optional<double>& rad);

@@ -72,13 +72,13 @@ void results_section(Document& doc, const Report& r) {
                             plus_minus(l.error_um.z(), l.uncertainty_um.z(), 2), fixed(l.error_um.norm(), 2),
                             std::to_string(l.points), fixed(l.residual_rms_um, 2)});
         doc.table({{"Loc.", 0.5},
-                   {"where", 2.5},
-                   {"Δx (µm)", 1.45, HAlign::Right},
-                   {"Δy (µm)", 1.45, HAlign::Right},
-                   {"Δz (µm)", 1.45, HAlign::Right},
+                   {"where", 2.2},
+                   {"Δx (µm)", 1.5, HAlign::Right},
+                   {"Δy (µm)", 1.5, HAlign::Right},
+                   {"Δz (µm)", 1.5, HAlign::Right},
                    {"|ΔV| (µm)", 0.9, HAlign::Right},
                    {"points", 0.65, HAlign::Right},
-                   {"rms (µm)", 0.8, HAlign::Right}},
+                   {"rms (µm)", 0.95, HAlign::Right}},
                   rows);
     }
 

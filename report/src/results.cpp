@@ -152,6 +152,8 @@ void add_identification(Report& r, std::string_view kind, const json& p) {
     if (find(p, "iterations")) m.iterations = opt_int(kind, p, "iterations", 0);
     if (const auto v = opt_num(kind, p, "initial_rms_mm")) m.residual_rms_before_um = *v * 1000;
     if (const auto v = opt_num(kind, p, "residual_rms_mm")) m.residual_rms_after_um = *v * 1000;
+    if (const auto v = opt_num(kind, p, "initial_rms_um")) m.residual_rms_before_um = *v;  // `ballbar identify`
+    if (const auto v = opt_num(kind, p, "residual_rms_um")) m.residual_rms_after_um = *v;
     m.condition = opt_num(kind, p, "condition");
     const json* est = find(p, "estimates");
     if (est && !est->is_array()) bad(kind, "estimates", "must be an array");
@@ -300,7 +302,7 @@ bool add_result(Report& report, std::string_view kind, const nlohmann::json& pay
         add_discovery(report, kind, payload);
     else if (kind == "compensation")
         add_compensation(report, kind, payload);
-    else if (kind == "procedure")
+    else if (kind == "procedure" || kind == "acquisition.transition")
         add_procedure(report, kind, payload);
     else
         return false;

@@ -8,19 +8,15 @@
 #include "ballbar/report/build.hpp"
 #include "poppler.hpp"
 #include "store_fixture.hpp"
+#include "text_format.hpp"
 
 namespace ballbar::report {
 namespace {
 
-using testing::TempDir;
+using testing::fixed_text;
+using testing::plus_minus_text;
 
-std::string fixed_text(double v, int decimals) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-    std::string s(buf);
-    if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-    return s;
-}
+using testing::TempDir;
 
 storage::StoreOptions fast() {
     storage::StoreOptions o;
@@ -69,8 +65,7 @@ TEST_P(BuildByType, StoredSessionBecomesTheReport) {
     const auto j = to_json(r);
     for (const auto& l : j["locations"])
         for (int k = 0; k < 3; ++k)
-            EXPECT_NE(text.find(fixed_text(l["error_um"][k].get<double>(), 2) + " ± " +
-                                fixed_text(l["uncertainty_um"][k].get<double>(), 2)),
+            EXPECT_NE(text.find(plus_minus_text(l["error_um"][k].get<double>(), l["uncertainty_um"][k].get<double>())),
                       std::string::npos);
     for (const auto& o : j["orientation"])
         EXPECT_NE(text.find(fixed_text(o["exact"]["arcsec"].get<double>(), 1) + "″"), std::string::npos);

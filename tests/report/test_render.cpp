@@ -10,22 +10,18 @@
 #include "ballbar/report/report.hpp"
 #include "poppler.hpp"
 #include "synthetic.hpp"
+#include "text_format.hpp"
 
 namespace ballbar::report {
 namespace {
+
+using testing::fixed_text;
+using testing::plus_minus_text;
 
 using testing::pdf_page_size;
 using testing::pdf_pages;
 using testing::pdf_text;
 using testing::TempDir;
-
-std::string fmt2(double v, int decimals) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-    std::string s(buf);
-    if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-    return s;
-}
 
 class RenderByType : public ::testing::TestWithParam<analysis::MachineType> {};
 
@@ -52,21 +48,20 @@ TEST_P(RenderByType, PdfHoldsTheKeyFiguresOfTheJson) {
     ASSERT_EQ(j["locations"].size(), r.locations.size());
     for (const auto& l : j["locations"]) {
         for (int k = 0; k < 3; ++k) {
-            expect_in_text(fmt2(l["error_um"][k].get<double>(), 2) + " ± " +
-                           fmt2(l["uncertainty_um"][k].get<double>(), 2));
+            expect_in_text(plus_minus_text(l["error_um"][k].get<double>(), l["uncertainty_um"][k].get<double>()));
         }
-        expect_in_text(fmt2(l["magnitude_um"].get<double>(), 2));
+        expect_in_text(fixed_text(l["magnitude_um"].get<double>(), 2));
     }
     ASSERT_EQ(j["orientation"].size(), r.orientation.size());
     for (const auto& o : j["orientation"]) {
-        expect_in_text(fmt2(o["exact"]["deg"].get<double>(), 5) + "°");
-        expect_in_text(fmt2(o["exact"]["arcsec"].get<double>(), 1) + "″");
-        expect_in_text(fmt2(o["first_order"]["deg"].get<double>(), 5) + "°");
-        expect_in_text(fmt2(o["first_order"]["arcsec"].get<double>(), 1) + "″");
+        expect_in_text(fixed_text(o["exact"]["deg"].get<double>(), 5) + "°");
+        expect_in_text(fixed_text(o["exact"]["arcsec"].get<double>(), 1) + "″");
+        expect_in_text(fixed_text(o["first_order"]["deg"].get<double>(), 5) + "°");
+        expect_in_text(fixed_text(o["first_order"]["arcsec"].get<double>(), 1) + "″");
     }
     for (const auto& p : j["model"]["parameters"]) {
         expect_in_text(p["name"].get<std::string>());
-        expect_in_text(fmt2(p["value"].get<double>(), 3));
+        expect_in_text(fixed_text(p["value"].get<double>(), 3));
     }
     for (const auto& s : j["discovery"]) expect_in_text(s["effect"].get<std::string>());
     for (const auto& e : j["procedure"]) expect_in_text(e["step"].get<std::string>());

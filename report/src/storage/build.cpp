@@ -167,6 +167,10 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
             const double wall = parse_iso8601(res.created_at);
             payload["time_s"] = std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0;
         }
+        if (res.kind == "identification" && payload.is_object() && !payload.contains("name") && res.model_id) {
+            const storage::ModelRecord m = store.model(*res.model_id);  // the model version it produced
+            payload["name"] = m.name + " v" + std::to_string(m.version);
+        }
         try {
             add_result(r, res.kind, payload);
         } catch (const ReportError& e) {
