@@ -8,7 +8,7 @@ namespace ballbar::storage {
 namespace {
 
 using analysis::MachineType;
-using nlohmann::json;
+using json = nlohmann::ordered_json;  // keeps the key order of what we read and write
 
 bool uses(MachineType type, std::string_view key) {
     if (key == "tool_ball_mm") return true;
@@ -32,8 +32,8 @@ analysis::Vec3 vec_from(const json& j, std::string_view key) {
     return v;
 }
 
-json vec_to(const analysis::Vec3& v) {
-    return json::array({v.x(), v.y(), v.z()});
+nlohmann::ordered_json vec_to(const analysis::Vec3& v) {
+    return nlohmann::ordered_json::array({v.x(), v.y(), v.z()});
 }
 
 json parse_object(std::string_view text, std::string_view what) {
@@ -50,7 +50,7 @@ json parse_object(std::string_view text, std::string_view what) {
 }  // namespace
 
 std::string machine_to_json(const analysis::MachineGeometry& m) {
-    json j = json::object();
+    nlohmann::ordered_json j = nlohmann::ordered_json::object();
     j["type"] = std::string(analysis::to_string(m.type));
     if (!m.name.empty()) j["name"] = m.name;
     if (uses(m.type, "a_pivot_mm")) j["a_pivot_mm"] = vec_to(m.a_pivot_mm);
@@ -99,20 +99,20 @@ analysis::MachineGeometry machine_from_json(std::string_view text, std::vector<s
 }
 
 std::string instrument_to_json(const Instrument& in) {
-    json j = json::object();
-    if (!in.extra_json.empty()) {
-        try {
-            j = json::parse(in.extra_json);
-        } catch (const json::parse_error&) {
-            j = json::object();
-        }
-        if (!j.is_object()) j = json::object();
-    }
+    nlohmann::ordered_json j = nlohmann::ordered_json::object();
     if (!in.model.empty()) j["model"] = in.model;
     if (!in.serial.empty()) j["serial"] = in.serial;
     if (!in.firmware.empty()) j["firmware"] = in.firmware;
     if (in.calibrated_length_mm) j["calibrated_length_mm"] = *in.calibrated_length_mm;
     if (!in.calibration_date.empty()) j["calibration_date"] = in.calibration_date;
+    if (!in.extra_json.empty()) {
+        const auto extra = nlohmann::ordered_json::parse(in.extra_json, nullptr, false);
+        if (extra.is_object()) {
+            for (const auto& [key, value] : extra.items()) {
+                if (!j.contains(key)) j[key] = value;
+            }
+        }
+    }
     return j.dump();
 }
 

@@ -21,10 +21,17 @@ std::string shortest(double v) {
     return std::string(buf, r.ptr);
 }
 
-/// Degrees whose text reads back (through deg_to_rad) to exactly `rad`, when such a double exists nearby.
+/// The shortest decimal degrees that read back (through deg_to_rad) to exactly `rad`: -30, not
+/// -29.999999999999996. Falls back to the nearest double when no decimal maps back exactly.
 std::string degrees(double rad) {
     const double d = analysis::rad_to_deg(rad);
-    if (analysis::deg_to_rad(d) == rad) return shortest(d);
+    for (int precision = 1; precision <= 17; ++precision) {
+        char buf[40];
+        const auto r = std::to_chars(buf, buf + sizeof buf, d, std::chars_format::general, precision);
+        double back = 0;
+        std::from_chars(buf, r.ptr, back);
+        if (analysis::deg_to_rad(back) == rad) return shortest(back);
+    }
     double up = d, down = d;
     for (int k = 0; k < 16; ++k) {
         up = std::nextafter(up, std::numeric_limits<double>::infinity());

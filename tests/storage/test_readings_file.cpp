@@ -219,6 +219,24 @@ TEST(ReadingsFile, WriterKeepsArbitraryRadiansExact) {
     }
 }
 
+TEST(ReadingsFile, WritesTheShortestDegreesAndParsesMultiLineQuotedFields) {
+    const auto f = read_readings_file(kDir + "tttrr_full_crlf.csv");
+    const std::string text = format_readings(f.set, f.metadata);
+    EXPECT_NE(text.find(",-30,90,"), std::string::npos) << text;
+    EXPECT_EQ(text.find("29.99999"), std::string::npos) << text;
+    EXPECT_NE(text.find("# machine: {\"type\":\"TTTRR\",\"name\":\"DL-5X\""), std::string::npos) << text;
+
+    const auto g = parse_readings(
+        "# ballbar-readings/1\n"
+        "# machine: {\"type\":\"RRTTT\",\"tool_ball_mm\":[0,0,-150]}\n"
+        "X_mm,Y_mm,Z_mm,A_deg,B_deg,socket_x_mm,socket_y_mm,socket_z_mm,measured_mm,remark\n"
+        "1,2,3,0,0,4,5,6,150.1,\"two\nlines, \"\"quoted\"\"\"\n"
+        " \"7\" ,2,3,0,0,4,5,6,150.2,x\n");
+    ASSERT_EQ(g.set.readings.size(), 2u);
+    EXPECT_EQ(g.set.readings[1].pose.X_mm, 7);
+    EXPECT_EQ(g.set.readings[1].measured_mm, 150.2);
+}
+
 TEST(ReadingsFile, ImportIsOneTransactionAndLoadReadingsReturnsIt) {
     test::TempDir dir;
     Store store(dir.file("a.db"));

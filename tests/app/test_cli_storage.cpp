@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: MIT
+// Whole-process tests of `ballbar import`, `export` and `sessions`.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace cli_storage {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::string kData = std::string(BALLBAR_TEST_DATA_DIR) + "/readings/";
+
+struct CliRun {
+    int code = -1;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+struct TempDir {
+    fs::path path;
+    TempDir() {
+        char tmpl[] = "/tmp/ballbar-cli-store-XXXXXX";
+        const char* d = ::mkdtemp(tmpl);
+        if (!d) throw std::runtime_error("mkdtemp");
+        path = d;
+    }
+    ~TempDir() { fs::remove_all(path); }
+    std::string file(const std::string& name) const { return (path / name).string(); }
+};
+
+CliRun run(const TempDir& dir, const std::string& args) {
+    const std::string cmd = std::string("'") + BALLBAR_EXE + "' --db '" + dir.file("test.db") + "' " + args +
+                            " </dev/null >'" + dir.file("stdout") + "' 2>'" + dir.file("stderr") + "'";
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir.path / "stdout");
+    r.err = slurp(dir.path / "stderr");
+    return r;
+}
+
+TEST(CliStorage, ImportExportImportRoundTripsWithoutLoss) {
+    TempDir d;
+    const CliRun a = run(d, "import '" + kData + "tttrr_full_crlf.csv'");
+    ASSERT_EQ(a.code, 0) << a.err;
+    EXPECT_NE(a.out.find("imported 8 readings"), std::string::npos) << a.out;
+    EXPECT_NE(a.err.find("unknown columns \"comment\", \"spindle_load\" ignored"), std::string::npos) << a.err;
+
+    ASSERT_EQ(run(d, "export 1 --format readings --out '" + d.file("one.csv") + "'").code, 0);
+    const CliRun b = run(d, "import '" + d.file("one.csv") + "' --json");
+    ASSERT_EQ(b.code, 0) << b.err;
+    EXPECT_EQ(json::parse(b.out)["session"], 2);
+    EXPECT_TRUE(b.err.empty()) << "an exported file imports without warnings: " << b.err;
+    ASSERT_EQ(run(d, "export 2 --format readings --out '" + d.file("two.csv") + "'").code, 0);
+    EXPECT_EQ(slurp(d.file("one.csv")), slurp(d.file("two.csv")));
+
+    const CliRun j1 = run(d, "export 1 --format json --out -");
+    const CliRun j2 = run(d, "export 2 --format json --out -");
+    ASSERT_EQ(j1.code, 0) << j1.err;
+    const json s1 = json::parse(j1.out), s2 = json::parse(j2.out);
+    EXPECT_EQ(s1["format"], "ballbar-session/1");
+    EXPECT_EQ(s1["points"], s2["points"]) << "every point field survives import → export → import exactly";
+    for (const char* key : {"machine", "instrument", "operator", "notes", "started_at", "metadata", "source"}) {
+        EXPECT_EQ(s1["session"][key], s2["session"][key]) << key;
+    }
+    EXPECT_EQ(s1["session"]["operator"], "Ada Lovelace");
+    EXPECT_EQ(s1["session"]["metadata"]["shop_order"]["id"], 4711);
+    EXPECT_EQ(s1["points"].size(), 8u);
+    EXPECT_EQ(s1["transitions"].size(), 2u);
+    EXPECT_NE(s1["session"]["uuid"], s2["session"]["uuid"]);
+}
+
+TEST(CliStorage, InvalidFileExitsTwoWithLineAndImportsNothing) {
+    TempDir d;
+    ASSERT_EQ(run(d, "import '" + kData + "spec_example.csv'").code, 0);
+    const CliRun r = run(d, "import '" + kData + "invalid/non_numeric.csv'");
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("line 5: column \"Z_mm\": \"-12O.042\" is not a finite number"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("nothing imported"), std::string::npos) << r.err;
+    const CliRun list = run(d, "sessions --json");
+    ASSERT_EQ(list.code, 0) << list.err;
+    EXPECT_EQ(json::parse(list.out).size(), 1u);
+    EXPECT_EQ(run(d, "import '" + d.file("missing.csv") + "'").code, 2);
+}
+
+TEST(CliStorage, SessionsListsAndShows) {
+    TempDir d;
+    ASSERT_EQ(run(d, "import '" + kData + "rrttt_minimal.csv'").code, 0);
+    ASSERT_EQ(run(d, "import '" + kData + "rtttr_nominal_mismatch.csv'").code, 0);
+    const CliRun list = run(d, "sessions --json");
+    ASSERT_EQ(list.code, 0) << list.err;
+    const json l = json::parse(list.out);
+    ASSERT_EQ(l.size(), 2u);
+    EXPECT_EQ(l[0]["state"], "completed");
+    EXPECT_EQ(l[0]["source"], "imported");
+    EXPECT_EQ(l[0]["point_count"], 5);
+    EXPECT_EQ(l[1]["machine"]["type"], "RTTTR");
+    const std::string uuid = l[1]["uuid"];
+
+    const CliRun show = run(d, "sessions show " + uuid.substr(0, 8) + " --json");
+    ASSERT_EQ(show.code, 0) << show.err;
+    EXPECT_EQ(json::parse(show.out)["session"]["id"], 2);
+    const CliRun text = run(d, "sessions show 1");
+    ASSERT_EQ(text.code, 0) << text.err;
+    EXPECT_NE(text.out.find("created -> completed"), std::string::npos) << text.out;
+    const CliRun table = run(d, "sessions");
+    EXPECT_NE(table.out.find("RRTTT head-5X"), std::string::npos) << table.out;
+    EXPECT_EQ(run(d, "sessions show 99").code, 2);
+    EXPECT_EQ(run(d, "export 99 --format json --out -").code, 2);
+}
+
+TEST(CliStorage, NominalDisagreementIsReported) {
+    TempDir d;
+    const CliRun r = run(d, "import '" + kData + "rtttr_nominal_mismatch.csv'");
+    EXPECT_EQ(r.code, 0);
+    EXPECT_NE(r.err.find("1 row(s) give a nominal_mm"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("lines 5"), std::string::npos) << r.err;
+}
+
+TEST(CliStorage, CsvExportWritesPointsAndSamples) {
+    TempDir d;
+    ASSERT_EQ(run(d, "import '" + kData + "tttrr_full_crlf.csv'").code, 0);
+    const CliRun r = run(d, "export 1 --format csv --out '" + d.file("csv") + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string points = slurp(d.file("csv/points.csv"));
+    EXPECT_EQ(std::count(points.begin(), points.end(), '\n'), 9);
+    EXPECT_EQ(points.rfind("index,location,point,step,X_mm", 0), 0u);
+    EXPECT_EQ(slurp(d.file("csv/samples.csv")), "seq,device_time_us,displacement_nm,flags,bar_temp_C\n");
+}
+
+TEST(CliStorage, NewerDatabaseIsRefused) {
+    TempDir d;
+    ASSERT_EQ(run(d, "import '" + kData + "spec_example.csv'").code, 0);
+    ASSERT_EQ(std::system(("sqlite3 '" + d.file("test.db") + "' 'PRAGMA user_version = 7' >/dev/null").c_str()), 0);
+    const std::string before = slurp(d.file("test.db"));
+    const CliRun r = run(d, "sessions");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("newer than this ballbar"), std::string::npos) << r.err;
+    EXPECT_EQ(slurp(d.file("test.db")), before);
+}
+
+}  // namespace
+}  // namespace cli_storage
