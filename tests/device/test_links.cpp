@@ -105,7 +105,9 @@ TEST(PtyLink, StreamsWithoutLossAtFullSpeed) {
 
 TEST(PtyLink, DisconnectIsReportedAndANewPtyComesBack) {
     auto cfg = fast_config();
-    cfg.faults.disconnect_at_s = 1.0;
+    // Late enough that the as-fast-as-possible host (which runs ~1.3 s of samples ahead of the reader)
+    // cannot reach it before StartReply has been delivered.
+    cfg.faults.disconnect_at_s = 5.0;
     cfg.faults.disconnect_s = 0.2;
     PtyFixture fx(cfg);
     Instrument inst(open_transport("serial:" + fx.wait_pty(1)));
@@ -129,7 +131,7 @@ TEST(PtyLink, DisconnectIsReportedAndANewPtyComesBack) {
 
 TEST(TcpLink, StreamsDisconnectsAndReconnects) {
     auto cfg = fast_config();
-    cfg.faults.disconnect_at_s = 2.0;
+    cfg.faults.disconnect_at_s = 5.0;  // see above
     cfg.faults.disconnect_s = 0.3;
     Emulator emu(cfg);
     TcpListener listener(0);
