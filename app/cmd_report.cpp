@@ -1,0 +1,78 @@
+// SPDX-License-Identifier: MIT
+// `ballbar report SESSION [--out report.pdf] [--json]`: the session report (docs/report.md) as a vector
+// PDF on A4 pages and/or, with --json, the same content as JSON on standard output.
+#if __has_include("ballbar/report/build.hpp") && defined(BALLBAR_REPORT_HAS_STORAGE)
+
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "ballbar/report/build.hpp"
+#include "ballbar/report/report.hpp"
+#include "ballbar/storage/sqlite.hpp"
+#include "ballbar/storage/store.hpp"
+#include "ballbar/version.hpp"
+#include "command.hpp"
+
+namespace ballbar::app {
+namespace {
+
+struct ReportOptions {
+    std::string session;
+    std::string out;
+    bool json = false;
+};
+
+int run_report(const ReportOptions& o, const Globals& globals) {
+    if (o.out.empty() && !o.json) throw CliError(kExitUsage, "nothing to write: give --out FILE.pdf and/or --json");
+    storage::StoreOptions so;
+    so.read_only = true;  // a report never changes the database
+    so.recover = false;
+    std::unique_ptr<storage::Store> store;
+    const std::string db = resolve_db_path(globals);
+    try {
+        store = std::make_unique<storage::Store>(db, so);
+    } catch (const storage::StorageError& e) {
+        throw CliError(kExitFailure, "cannot open " + db + ": " + e.what());
+    }
+    std::int64_t id = 0;
+    try {
+        id = store->find_session(o.session);
+    } catch (const storage::StorageError& e) {
+        throw CliError(kExitUsage, "no session '" + o.session + "': " + e.what());
+    }
+    report::BuildOptions bo;
+    bo.software_version = kVersion;
+    report::Report r;
+    try {
+        r = report::build_report(*store, id, bo);
+    } catch (const report::ReportError& e) {
+        throw CliError(kExitFailure, "session " + std::to_string(id) + ": " + e.what());
+    }
+    if (!o.out.empty()) {
+        try {
+            const int pages = report::render_pdf(r, o.out);
+            std::cerr << "ballbar: wrote " << o.out << " (" << pages << (pages == 1 ? " page" : " pages") << ")\n";
+        } catch (const report::ReportError& e) {
+            throw CliError(kExitFailure, e.what());
+        }
+    }
+    if (o.json) std::cout << report::to_json(r).dump(2) << std::endl;
+    return kExitOk;
+}
+
+}  // namespace
+}  // namespace ballbar::app
+
+BALLBAR_COMMAND(report) {
+    using namespace ballbar::app;
+    auto opts = std::make_shared<ReportOptions>();
+    auto* sub =
+        root.add_subcommand("report", "Session report: a vector PDF with plots (A4), and/or its content as JSON");
+    sub->add_option("session", opts->session, "Session id or uuid prefix")->required();
+    sub->add_option("--out,-o", opts->out, "Write the PDF report to this file");
+    sub->add_flag("--json", opts->json, "Print the report's content as JSON (schema ballbar-report/1)");
+    sub->callback([opts, &globals] { globals.action = [opts, &globals] { return run_report(*opts, globals); }; });
+}
+
+#endif
