@@ -124,7 +124,7 @@ class Instrument {
     InstrumentOptions options_;
     SampleQueue queue_;
     protocol::Decoder decoder_;
-    std::array<std::uint8_t, 4096> rx_{};
+    std::array<std::uint8_t, 16384> rx_{};
     protocol::StreamFrame frame_{};
     std::optional<InstrumentInfo> info_;
     StreamStats stats_;
