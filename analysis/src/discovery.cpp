@@ -297,6 +297,7 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
     }
     if (model.size() != requested.size()) fit = fit_model(readings, model, fit.model);
     out.base_model = model;
+    out.base_fit = fit.model;
 
     // 2. One Jacobian over the model and every candidate, at the base fit; unit-scaled columns.
     StepContext ctx{readings, options, model, {}, {}, explaining_variables(readings)};
@@ -357,6 +358,7 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
         st.value = (rss - rss_new) / std::max(rss_new / std::max(dof_new, 1.0), 1e-300);
         st.p_value = f_distribution_sf(st.value, 1.0, dof_new);
         st.explained_by = best_variable(r - r_new, ctx.variables);
+        st.model_after = refit.model;
         st.candidates = sc.scores;
         std::sort(st.candidates.begin(), st.candidates.end(), [](const auto& a, const auto& b) { return a.f > b.f; });
         out.steps.push_back(std::move(st));

@@ -83,6 +83,7 @@ struct DiscoveryStep {
     double p_value = 1;
     ExplainingVariable explained_by = ExplainingVariable::bar_direction;
     std::vector<CandidateScore> candidates;  ///< every candidate of the step, best first
+    ErrorParams model_after{};               ///< the model's parameters after the step's refit
 };
 
 struct DiscoveryResult {
@@ -90,6 +91,7 @@ struct DiscoveryResult {
     std::vector<Param> base_model;   ///< the base model as fitted (unobservable ones left out)
     std::vector<Param> final_model;  ///< base model plus the steps' parameters
     double rms_initial_mm = 0;       ///< after fitting the base model
+    ErrorParams base_fit{};          ///< the base model's parameters as fitted
     double rms_final_mm = 0;
     std::vector<DiscoveryStep> steps;
     /// Groups of names the data cannot tell apart (effect ids, parameter names, "socket<k>.z").
