@@ -43,7 +43,7 @@ class SampleWriter {
     std::uint64_t committed() const { return committed_; }
 
   private:
-    static constexpr int kRowsPerInsert = 32;
+    static constexpr int kRowsPerInsert = 64;
     void bind_row(Statement& st, int first_param, const analysis::BarSample& s, std::uint64_t seq);
 
     Store& store_;
