@@ -295,7 +295,8 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
         }
         if (e.param) model.push_back(*e.param);
     }
-    if (model.size() != requested.size()) fit = fit_model(readings, model, fit.model);
+    // The fit already held the unobservable ones at their start values and fitted the rest: it is the
+    // base model's fit.
     out.base_model = model;
     out.base_fit = fit.model;
 
