@@ -1,0 +1,144 @@
+// SPDX-License-Identifier: MIT
+// Whole-process tests of `ballbar discover` on readings files written by another program
+// (tests/data/readings/discovery_make.py: its own kinematics, other column order, extra columns,
+// quoted fields, CRLF), and on a stored session: the JSON shape, the effect named, exit codes, and the
+// result and the versioned model stored with the session.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+    int code = -1;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+struct TempDir {
+    fs::path path;
+    TempDir() {
+        char tmpl[] = "/tmp/ballbar-cli-discover-XXXXXX";
+        const char* d = ::mkdtemp(tmpl);
+        EXPECT_NE(d, nullptr);
+        path = d ? d : "/tmp";
+    }
+    ~TempDir() { fs::remove_all(path); }
+};
+
+CliRun run(const TempDir& dir, const std::string& args) {
+    const std::string cmd = std::string("'") + BALLBAR_EXE + "' --db '" + (dir.path / "db.sqlite").string() + "' " +
+                            args + " </dev/null >'" + (dir.path / "out").string() + "' 2>'" +
+                            (dir.path / "err").string() + "'";
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir.path / "out");
+    r.err = slurp(dir.path / "err");
+    return r;
+}
+
+std::string data(const std::string& name) {
+    return std::string(BALLBAR_TEST_DATA_DIR) + "/readings/" + name;
+}
+
+TEST(CliDiscover, NamesTheHiddenEffectInAThirdPartyFile) {
+    TempDir dir;
+    const CliRun r = run(dir, "discover --json '" + data("discovery_spindle_growth.csv") + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    json j;
+    ASSERT_NO_THROW(j = json::parse(r.out)) << r.out;
+    for (const char* key : {"base_model", "rms_initial_um", "steps", "rms_final_um", "confounded", "unidentifiable"})
+        EXPECT_TRUE(j.contains(key)) << key;
+    EXPECT_EQ(j.size(), 6u) << "exactly the issue's keys";
+    EXPECT_EQ(j["base_model"].front(), "Y0A");
+    ASSERT_EQ(j["steps"].size(), 1u) << r.out;
+    const json& st = j["steps"][0];
+    EXPECT_EQ(st["effect"], "spindle_thermal_growth");
+    EXPECT_EQ(st["unit"], "mm/h");
+    EXPECT_EQ(st["criterion"], "F");
+    EXPECT_EQ(st["explained_by"], "time");
+    // The file's generator hid 0.025 mm/h of growth under 0.4 µm of noise.
+    const double est = st["estimate"], sd = st["stderr"];
+    EXPECT_LE(std::abs(est - 0.025), std::max(3 * sd, 0.0025)) << est << " ± " << sd;
+    for (const char* key : {"effect", "iso", "estimate", "unit", "stderr", "rms_before_um", "rms_after_um", "criterion",
+                            "value", "explained_by"})
+        EXPECT_TRUE(st.contains(key)) << key;
+    EXPECT_GT(j["rms_initial_um"].get<double>(), 2.0);
+    EXPECT_LT(j["rms_final_um"].get<double>(), 0.5);
+    EXPECT_LT(st["rms_after_um"].get<double>(), st["rms_before_um"].get<double>());
+}
+
+TEST(CliDiscover, NothingNamedWithoutAnEffectAndTheTableIsReadable) {
+    TempDir dir;
+    const CliRun j = run(dir, "discover --json '" + data("discovery_none.csv") + "'");
+    ASSERT_EQ(j.code, 0) << j.err;
+    EXPECT_TRUE(json::parse(j.out)["steps"].empty()) << j.out;
+    const CliRun t = run(dir, "discover '" + data("discovery_spindle_growth.csv") + "'");
+    ASSERT_EQ(t.code, 0) << t.err;
+    EXPECT_NE(t.out.find("spindle_thermal_growth"), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find("final residual RMS"), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find("criterion:"), std::string::npos) << t.out;
+}
+
+TEST(CliDiscover, ModelOptionAndErrors) {
+    TempDir dir;
+    // A model without X0C: the location error is found among the candidates.
+    const CliRun m =
+        run(dir, "discover --json --model Y0A,Z0A,B0A,C0A,Y0C,A0C,B0C '" + data("discovery_none.csv") + "'");
+    ASSERT_EQ(m.code, 0) << m.err;
+    const json j = json::parse(m.out);
+    ASSERT_FALSE(j["steps"].empty()) << m.out;
+    EXPECT_EQ(j["steps"][0]["effect"], "location_X0C");
+    EXPECT_EQ(j["steps"][0]["iso"], "X0C");
+
+    const CliRun bad = run(dir, "discover --model X0C,nonsense '" + data("discovery_none.csv") + "'");
+    EXPECT_EQ(bad.code, 2);
+    EXPECT_NE(bad.err.find("nonsense"), std::string::npos) << bad.err;
+
+    const CliRun missing = run(dir, "discover /no/such/file.csv");
+    EXPECT_EQ(missing.code, 2);
+    EXPECT_NE(missing.err.find("/no/such/file.csv"), std::string::npos) << missing.err;
+
+    std::ofstream(dir.path / "broken.csv") << "# ballbar-readings/1\n# machine: {\"type\":\"TTTRR\"}\nX_mm,Y_mm\n1,2\n";
+    const CliRun broken = run(dir, "discover '" + (dir.path / "broken.csv").string() + "'");
+    EXPECT_EQ(broken.code, 2);
+    EXPECT_NE(broken.err.find("broken.csv"), std::string::npos) << broken.err;
+}
+
+TEST(CliDiscover, StoresResultAndModelHistoryWithTheSession) {
+    TempDir dir;
+    const CliRun imp = run(dir, "import '" + data("discovery_spindle_growth.csv") + "'");
+    if (imp.code != 0) GTEST_SKIP() << "no `ballbar import` in this build: " << imp.err;
+    const CliRun r = run(dir, "discover --json --save-model growth-test 1");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(json::parse(r.out)["steps"][0]["effect"], "spindle_thermal_growth");
+    // The database holds the result and two model versions (base, + spindle growth).
+    const std::string q = "sqlite3 '" + (dir.path / "db.sqlite").string() + "' ";
+    const std::string cmd =
+        q + "\"select count(*) from results where kind='discovery';\" > '" + (dir.path / "q").string() + "' 2>&1";
+    if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "no sqlite3 shell";
+    EXPECT_EQ(slurp(dir.path / "q"), "1\n");
+    const std::string cmd2 =
+        q + "\"select count(*) from models where name='growth-test';\" > '" + (dir.path / "q").string() + "' 2>&1";
+    ASSERT_EQ(std::system(cmd2.c_str()), 0);
+    EXPECT_EQ(slurp(dir.path / "q"), "2\n");
+}
+
+}  // namespace
