@@ -326,7 +326,8 @@ void add_solver(CLI::App& solve, Globals& globals, const char* name, const char*
 
 BALLBAR_COMMAND(solve) {
     using namespace ballbar::app;
-    auto* solve = root.add_subcommand("solve", "Numerical services as JSON: one request in (stdin or --input), one answer out");
+    auto* solve =
+        root.add_subcommand("solve", "Numerical services as JSON: one request in (stdin or --input), one answer out");
     solve->require_subcommand(1);
     add_solver(*solve, globals, "ssm", "Total position error of one location from n >= 3 bar readings (SSM)",
                "Request:  {\"socket_mm\":[x,y,z], \"points_mm\":[[x,y,z],...], \"delta_l_mm\":[...],\n"
