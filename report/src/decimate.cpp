@@ -21,7 +21,8 @@ std::size_t MinMaxDecimator::column_of(double x) const {
     if (!(width_ > 0)) return 0;
     const double f = (x - x_min_) / width_ * static_cast<double>(columns_);
     if (!(f > 0)) return 0;
-    return std::min(columns_ - 1, static_cast<std::size_t>(f));
+    if (f >= static_cast<double>(columns_)) return columns_ - 1;  // beyond the range (and no overflowing cast)
+    return static_cast<std::size_t>(f);
 }
 
 void MinMaxDecimator::add(double x, double y) {

@@ -40,7 +40,12 @@ Ticks nice_ticks(double lo, double hi, int target) {
     t.decimals = std::max(0, static_cast<int>(-std::floor(std::log10(t.step) + 1e-9)));
     if (nice == 2.5 && mag < 1.5) ++t.decimals;  // 2.5, 0.25, …: one digit more than the magnitude
     const double first = std::ceil(lo / t.step - 1e-9);
-    for (double k = first; k * t.step <= hi + t.step * 1e-9; k += 1) t.values.push_back(k * t.step);
+    // At most a few dozen ticks, even when the range is tiny against its magnitude (k + 1 == k in doubles).
+    for (int i = 0; i < 64; ++i) {
+        const double v = (first + i) * t.step;
+        if (v > hi + t.step * 1e-9) break;
+        t.values.push_back(v);
+    }
     return t;
 }
 

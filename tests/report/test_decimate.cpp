@@ -91,5 +91,14 @@ TEST(Decimate, RefusesBadInput) {
     EXPECT_THROW(MinMaxDecimator(1, 0, 10), std::invalid_argument);
 }
 
+TEST(Decimate, PointsFarOutsideTheRangeGoToTheEdgeColumns) {
+    MinMaxDecimator d(0, 10, 5);
+    d.add(-1e300, 1);
+    d.add(5, 2);
+    d.add(1e300, 3);
+    const XYSeries s = d.take();
+    EXPECT_EQ(s.y, (std::vector<double>{1, 2, 3}));
+}
+
 }  // namespace
 }  // namespace ballbar::report

@@ -120,6 +120,19 @@ TEST(Render, UnwritablePathIsAClearError) {
     }
 }
 
+TEST(Render, DegenerateSeriesDoNotHangOrCrash) {
+    Report r = testing::synthetic_report(analysis::MachineType::TTTRR, 1000, 4);
+    // A trace whose range is tiny against its magnitude, and non-finite values in it.
+    r.trace.time_s = {1e9, 1e9 + 1e-6, 1e9 + 2e-6};
+    r.trace.displacement_um = {5.0, std::nan(""), 5.0 + 1e-12};
+    r.locations.resize(1);
+    r.locations[0].error_um = Vec3::Zero();  // nothing to draw to scale
+    TempDir dir;
+    const auto pdf = dir.path / "degenerate.pdf";
+    const int pages = render_pdf(r, pdf.string());
+    EXPECT_EQ(testing::pdf_pages(pdf), pages);
+}
+
 TEST(Json, HoldsTheContentWithUnitsAndNullForMissing) {
     Report r = testing::synthetic_report(analysis::MachineType::RRTTT, 20000, 5);
     r.orientation[0].first_order_rad.reset();  // singular first-order model
