@@ -47,8 +47,8 @@ std::vector<Rule> parse_rules(const std::string& path) {
         r.line = n;
         auto pos = text.cbegin();
         std::smatch m;
-        while (pos != text.cend() && std::regex_search(pos, text.cend(), m, token,
-                                                       std::regex_constants::match_continuous)) {
+        while (pos != text.cend() &&
+               std::regex_search(pos, text.cend(), m, token, std::regex_constants::match_continuous)) {
             r.keys.emplace(m[1].str(), std::make_pair(m[3].str(), m[4].str()));
             pos = m[0].second;
         }
