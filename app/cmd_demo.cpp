@@ -24,6 +24,10 @@
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
+#if __has_include("ballbar/report/build.hpp")
+#include "ballbar/report/build.hpp"
+#define BALLBAR_HAVE_REPORT 1
+#endif
 #if __has_include("compensation_demo.hpp")
 #include "compensation_demo.hpp"
 #define BALLBAR_HAVE_COMPENSATION_DEMO 1
@@ -41,6 +45,7 @@ struct DemoOptions {
     std::uint64_t seed = 1;
     bool json = false;
     bool compensate = false;
+    std::string report;  ///< --report PATH: write the session's PDF report
 };
 
 /// Answers every question with yes and drives the emulator's machine when the program should run.
@@ -235,6 +240,14 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     out["samples"] = sum.samples;
 
     int code = kExitOk;
+    if (!o.report.empty()) {
+#ifdef BALLBAR_HAVE_REPORT
+        report::render_pdf(report::build_report(store, id), o.report);
+        out["report"] = o.report;
+#else
+        throw CliError(kExitFailure, "--report: this build has no report module");
+#endif
+    }
 #ifdef BALLBAR_HAVE_COMPENSATION_DEMO
     CompensationDemoOptions co;
     co.seed = o.seed;
@@ -270,6 +283,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
                         arcsec(t["true_rad"]).c_str());
         std::printf("\nSession %lld stored in %s (%zu samples).\n", static_cast<long long>(id), store.path().c_str(),
                     sum.samples);
+        if (!o.report.empty()) std::printf("Report written to %s.\n", o.report.c_str());
     }
 #ifdef BALLBAR_HAVE_COMPENSATION_DEMO
     if (o.compensate && !o.json) {
@@ -290,6 +304,7 @@ BALLBAR_COMMAND(demo) {
         ->check(CLI::IsMember({"RRTTT", "TTTRR", "RTTTR"}));
     sub->add_option("--seed", o->seed, "Seed of the emulator's noise (same seed, same session)");
     sub->add_flag("--json", o->json, "Print the comparison as JSON");
+    sub->add_option("--report", o->report, "Also write the session's PDF report to this file");
     sub->add_flag("--compensate", o->compensate, "Then identify the errors and show the compensation");
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });
 }
