@@ -143,7 +143,7 @@ TEST(Identify, RecoversRandomMachinesWithinThreeStandardUncertainties) {
         std::mt19937_64 rng(20261121 + static_cast<int>(type));
         int within = 0, total = 0;
         double sum_sq = 0, worst = 0;
-        for (int machine = 0; machine < 25; ++machine) {
+        for (int machine = 0; machine < 15; ++machine) {
             const Simulated sim = simulate(g, plan, params, kNoiseMm, rng);
             FitOptions fo;
             fo.free_params = params;

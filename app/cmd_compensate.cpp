@@ -1,0 +1,213 @@
+// SPDX-License-Identifier: MIT
+// `ballbar compensate --model MODEL --program IN.nc --out OUT.nc [--dialect D] [--exact] [--json]`:
+// rewrites an NC program so that, on the machine described by the identified model, the tool ball
+// lands where the program meant it relative to the table (compensate.hpp). MODEL is a
+// `ballbar-model/1` JSON file (what `ballbar identify` stores), a model id in the database, or a model
+// name (its latest version). Reports the largest correction and the blocks near a singularity.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "ballbar/analysis/compensate.hpp"
+#include "ballbar/analysis/nc_program.hpp"
+#include "ballbar/storage/machine_json.hpp"
+#include "ballbar/storage/store.hpp"
+#include "command.hpp"
+
+namespace ballbar::app {
+namespace {
+
+namespace ba = ballbar::analysis;
+namespace bs = ballbar::storage;
+using nlohmann::json;
+
+struct CompensateArgs {
+    std::string model;
+    std::string program;
+    std::string out;
+    std::string dialect;
+    bool exact = false;
+    bool json = false;
+    double singular_deg = 0.06;
+};
+
+struct Model {
+    ba::MachineGeometry machine;
+    ba::ErrorParams params{};
+    std::string source;
+};
+
+std::string read_text(const std::string& path, const char* what) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw CliError(kExitUsage, std::string("cannot read ") + what + " " + path);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+Model parse_model(const std::string& text, const std::string& source) {
+    json j;
+    try {
+        j = json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw CliError(kExitUsage, source + ": malformed JSON: " + e.what());
+    }
+    if (!j.is_object()) throw CliError(kExitUsage, source + ": a model must be a JSON object");
+    if (j.contains("format") && j["format"] != "ballbar-model/1")
+        throw CliError(kExitUsage, source + ": format " + j["format"].dump() + " is not ballbar-model/1");
+    if (!j.contains("machine")) throw CliError(kExitUsage, source + ": no \"machine\" (the geometry is needed)");
+    Model m;
+    m.source = source;
+    try {
+        m.machine = bs::machine_from_json(j["machine"].dump());
+    } catch (const std::exception& e) {
+        throw CliError(kExitUsage, source + ": machine: " + e.what());
+    }
+    if (!j.contains("params") || !j["params"].is_object())
+        throw CliError(kExitUsage, source + ": \"params\" must be an object {\"X0C\": value, ...}");
+    for (const auto& item : j["params"].items()) {
+        const auto p = ba::parse_param(item.key());
+        if (!p) throw CliError(kExitUsage, source + ": params." + item.key() + ": unknown parameter");
+        if (!item.value().is_number() || !std::isfinite(item.value().get<double>()))
+            throw CliError(kExitUsage, source + ": params." + item.key() + ": must be a finite number");
+        m.params[*p] = item.value().get<double>();
+    }
+    return m;
+}
+
+Model load_model(const std::string& spec, const Globals& globals) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(spec, ec)) return parse_model(read_text(spec, "model"), spec);
+    bs::Store store(resolve_db_path(globals));
+    const bool numeric =
+        !spec.empty() && std::all_of(spec.begin(), spec.end(), [](char c) { return c >= '0' && c <= '9'; });
+    try {
+        if (numeric) {
+            const bs::ModelRecord r = store.model(std::stoll(spec));
+            return parse_model(r.params_json, "model " + spec);
+        }
+        if (const auto r = store.latest_model(spec))
+            return parse_model(r->params_json, "model " + r->name + " v" + std::to_string(r->version));
+    } catch (const bs::StorageError& e) {
+        throw CliError(kExitUsage, "model " + spec + ": " + e.what());
+    }
+    throw CliError(kExitUsage, "model '" + spec + "': no such file, model id or model name");
+}
+
+ba::NcDialect pick_dialect(const CompensateArgs& args) {
+    if (!args.dialect.empty()) {
+        const auto d = ba::parse_nc_dialect(args.dialect);
+        if (!d) throw CliError(kExitUsage, "--dialect: '" + args.dialect + "' (fanuc or linuxcnc)");
+        return *d;
+    }
+    const std::string ext = std::filesystem::path(args.program).extension().string();
+    return ext == ".ngc" ? ba::NcDialect::LinuxCNC : ba::NcDialect::Fanuc;
+}
+
+int run_compensate(const CompensateArgs& args, const Globals& globals) {
+    const Model model = load_model(args.model, globals);
+    const ba::NcDialect dialect = pick_dialect(args);
+    const std::string text = read_text(args.program, "program");
+    ba::NcProgram prog;
+    try {
+        prog = ba::parse_nc_program(text, dialect);
+    } catch (const ba::NcError& e) {
+        throw CliError(kExitUsage, args.program + ": " + e.what());
+    }
+    const std::vector<ba::Pose> poses = ba::resolve_poses(prog);
+    ba::CompensationOptions co;
+    co.singular_tolerance = std::sin(ba::deg_to_rad(args.singular_deg));
+    const ba::Compensator comp(model.machine, model.params, co);
+    const bool second_is_c = ba::rotary_axes(model.machine.type).second == 'C';
+
+    std::size_t compensated = 0;
+    double max_linear = 0, max_rotary = 0;
+    int max_linear_line = 0, max_rotary_line = 0;
+    std::vector<int> singular_lines;
+    std::size_t singular_count = 0;
+    for (std::size_t i = 0; i < prog.blocks.size(); ++i) {
+        ba::NcBlock& b = prog.blocks[i];
+        if (b.motion != ba::NcMotion::Rapid && b.motion != ba::NcMotion::Feed) continue;
+        const ba::Correction c = args.exact ? comp.exact(poses[i]) : comp.first_order(poses[i]);
+        const double lin = std::sqrt(c.du[0] * c.du[0] + c.du[1] * c.du[1] + c.du[2] * c.du[2]);
+        const double rot = std::max(std::abs(c.du[3]), std::abs(c.du[4]));
+        if (lin > max_linear) {
+            max_linear = lin;
+            max_linear_line = b.line;
+        }
+        if (rot > max_rotary) {
+            max_rotary = rot;
+            max_rotary_line = b.line;
+        }
+        if (c.singular) {
+            ++singular_count;
+            if (singular_lines.size() < 20) singular_lines.push_back(b.line);
+        }
+        b.X_mm = c.commanded.X_mm;
+        b.Y_mm = c.commanded.Y_mm;
+        b.Z_mm = c.commanded.Z_mm;
+        b.A_rad = c.commanded.A_rad;
+        if (second_is_c)
+            b.C_rad = c.commanded.C_rad;
+        else
+            b.B_rad = c.commanded.B_rad;
+        ++compensated;
+    }
+    {
+        std::ofstream out(args.out, std::ios::binary | std::ios::trunc);
+        if (!out) throw CliError(kExitFailure, "cannot write " + args.out);
+        out << ba::write_nc_program(prog, "compensated by ballbar with " + model.source);
+        if (!out) throw CliError(kExitFailure, "write failed: " + args.out);
+    }
+    if (args.json) {
+        json j{{"blocks", prog.blocks.size()},
+               {"compensated", compensated},
+               {"method", args.exact ? "exact" : "first-order"},
+               {"max_linear_correction_mm", max_linear},
+               {"max_linear_correction_line", max_linear_line},
+               {"max_rotary_correction_deg", ba::rad_to_deg(max_rotary)},
+               {"max_rotary_correction_line", max_rotary_line},
+               {"singular_blocks", singular_count},
+               {"singular_lines", singular_lines},
+               {"out", args.out}};
+        std::cout << j.dump(2) << '\n';
+    } else {
+        std::cout << "compensated " << compensated << " of " << prog.blocks.size() << " blocks ("
+                  << (args.exact ? "exact" : "first-order") << ") -> " << args.out << '\n'
+                  << "largest correction: " << max_linear * 1e3 << " um linear (line " << max_linear_line << "), "
+                  << ba::rad_to_deg(max_rotary) * 3600.0 << " arcsec rotary (line " << max_rotary_line << ")\n";
+        if (singular_count > 0) {
+            std::cout << singular_count << " block(s) within " << args.singular_deg
+                      << " deg of a singularity (rotary axis parallel to the tool): that axis was not corrected; lines";
+            for (int l : singular_lines) std::cout << ' ' << l;
+            std::cout << (singular_count > singular_lines.size() ? " ...\n" : "\n");
+        }
+    }
+    return kExitOk;
+}
+
+}  // namespace
+}  // namespace ballbar::app
+
+BALLBAR_COMMAND(compensate) {
+    using namespace ballbar::app;
+    auto args = std::make_shared<CompensateArgs>();
+    auto* sub = root.add_subcommand("compensate", "Rewrite an NC program through an identified error model");
+    sub->add_option("--model", args->model, "ballbar-model/1 JSON file, model id or model name")->required();
+    sub->add_option("--program", args->program, "NC program to compensate")->required();
+    sub->add_option("--out", args->out, "where to write the compensated program")->required();
+    sub->add_option("--dialect", args->dialect, "fanuc or linuxcnc (default: by extension, .ngc = linuxcnc)");
+    sub->add_flag("--exact", args->exact, "exact (Newton) solution instead of the first-order Jacobian one");
+    sub->add_option("--singular-deg", args->singular_deg,
+                    "within this angle of a singularity the rotary axis is not corrected (default 0.06)")
+        ->check(CLI::Range(0.0, 45.0));
+    sub->add_flag("--json", args->json, "print the report as JSON");
+    sub->footer("See docs/compensation.md.");
+    sub->callback([&globals, args] { globals.action = [&globals, args]() { return run_compensate(*args, globals); }; });
+}

@@ -1,0 +1,251 @@
+// SPDX-License-Identifier: MIT
+// Whole-process tests of issue 6's commands: `ballbar solve compensate`, `ballbar identify`,
+// `ballbar compensate` and the proof `ballbar demo-compensate`.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Run {
+    int code = -1;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+/// A scratch directory removed at the end of the test.
+struct TempDir {
+    fs::path path;
+    TempDir() {
+        char tmpl[] = "/tmp/ballbar-cli-comp-XXXXXX";
+        const char* d = ::mkdtemp(tmpl);
+        if (!d) throw std::runtime_error("mkdtemp");
+        path = d;
+    }
+    ~TempDir() { fs::remove_all(path); }
+};
+
+/// Runs `ballbar <args>` with `input` on stdin (in `dir`); captures stdout, stderr and the exit code.
+Run run(const TempDir& dir, const std::string& args, const std::string& input = "") {
+    std::ofstream(dir.path / "stdin") << input;
+    const std::string cmd = std::string("'") + BALLBAR_EXE + "' --db '" + (dir.path / "test.db").string() + "' " +
+                            args + " <'" + (dir.path / "stdin").string() + "' >'" + (dir.path / "stdout").string() +
+                            "' 2>'" + (dir.path / "stderr").string() + "'";
+    const int status = std::system(cmd.c_str());
+    Run r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir.path / "stdout");
+    r.err = slurp(dir.path / "stderr");
+    return r;
+}
+
+void expect_field_error(const Run& r, const std::string& field) {
+    EXPECT_EQ(r.code, 2) << r.err;
+    json e;
+    ASSERT_NO_THROW(e = json::parse(r.err)) << r.err;
+    EXPECT_TRUE(e.contains("error"));
+    if (!field.empty()) EXPECT_EQ(e.value("field", ""), field) << r.err;
+}
+
+// ---- solve compensate -------------------------------------------------------------------------
+
+TEST(CliSolveCompensate, AnswersWithFirstOrderAndExactCorrections) {
+    TempDir d;
+    const json req{{"kinematics", "lei-hsu"},
+                   {"offsets_mm", {{"Xw0", 10}, {"Yw0", -5}, {"Zw0", 2}, {"Z3", 150}}},
+                   {"u", {40, -25, 120, 0.5, 0.8}},
+                   {"dv", {0.01, -0.02, 0.005, 2e-5, -1e-5, 1e-5}}};
+    const Run r = run(d, "solve compensate", req.dump());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json a = json::parse(r.out);
+    ASSERT_EQ(a["du"].size(), 5u);
+    ASSERT_EQ(a["exact_du"].size(), 5u);
+    EXPECT_FALSE(a["singular"].get<bool>());
+    EXPECT_TRUE(a["method"].is_string());
+    // The closed-form orientation part (seed-math): dθa = C_a(S_c di + C_c dj) − S_a dk.
+    const double sa = std::sin(0.5), ca = std::cos(0.5), sc = std::sin(0.8), cc = std::cos(0.8);
+    EXPECT_NEAR(a["du"][3].get<double>(), ca * (sc * 2e-5 + cc * -1e-5) - sa * 1e-5, 1e-15);
+    EXPECT_NEAR(a["du"][4].get<double>(), (cc * 2e-5 - sc * -1e-5) / sa, 1e-15);
+    // First order and exact agree to second order (dv of 20 µm on ~150 mm: ~1e-6).
+    for (int i = 0; i < 5; ++i) EXPECT_NEAR(a["du"][i].get<double>(), a["exact_du"][i].get<double>(), 1e-5);
+}
+
+TEST(CliSolveCompensate, SingularPoseHasNoCCorrection) {
+    TempDir d;
+    const json req{{"kinematics", "lei-hsu"}, {"u", {40, -25, 120, 0.0, 0.8}}, {"dv", {0.01, 0, 0, 2e-5, 1e-5, 0}}};
+    const Run r = run(d, "solve compensate", req.dump());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json a = json::parse(r.out);
+    EXPECT_TRUE(a["singular"].get<bool>());
+    EXPECT_EQ(a["du"][4].get<double>(), 0.0);
+    EXPECT_EQ(a["exact_du"][4].get<double>(), 0.0);
+}
+
+TEST(CliSolveCompensate, MalformedRequestsNameTheField) {
+    TempDir d;
+    const json ok{{"kinematics", "lei-hsu"}, {"u", {0, 0, 0, 0.5, 0}}, {"dv", {0, 0, 0, 0, 0, 0}}};
+    json r1 = ok;
+    r1.erase("u");
+    expect_field_error(run(d, "solve compensate", r1.dump()), "u");
+    json r2 = ok;
+    r2["u"] = {1, 2, 3};
+    expect_field_error(run(d, "solve compensate", r2.dump()), "u");
+    json r3 = ok;
+    r3["dv"][3] = "x";
+    expect_field_error(run(d, "solve compensate", r3.dump()), "dv[3]");
+    json r4 = ok;
+    r4["kinematics"] = "puma";
+    expect_field_error(run(d, "solve compensate", r4.dump()), "kinematics");
+    json r5 = ok;
+    r5["offsets_mm"] = {{"Q", 1}};
+    expect_field_error(run(d, "solve compensate", r5.dump()), "offsets_mm.Q");
+    json r6 = ok;
+    r6["extra"] = 1;
+    expect_field_error(run(d, "solve compensate", r6.dump()), "extra");
+    expect_field_error(run(d, "solve compensate", "{\"kinematics\": "), "");
+}
+
+// ---- identify and compensate ------------------------------------------------------------------
+
+// A TTTRR machine whose C axis line is off by (dx, dy): readings of cube-corner SSM locations,
+// computed here from the readings format's own definition so the test does not share code with
+// the implementation.
+struct Vec {
+    double x, y, z;
+};
+Vec rx(double a, Vec v) {
+    return {v.x, std::cos(a) * v.y - std::sin(a) * v.z, std::sin(a) * v.y + std::cos(a) * v.z};
+}
+Vec rz(double a, Vec v) {
+    return {std::cos(a) * v.x - std::sin(a) * v.y, std::sin(a) * v.x + std::cos(a) * v.y, v.z};
+}
+Vec add(Vec a, Vec b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+Vec sub(Vec a, Vec b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+double norm(Vec a) {
+    return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+}
+
+std::string readings_file(double x0c_mm, double y0c_mm) {
+    std::ostringstream f;
+    f.precision(17);
+    f << "# ballbar-readings/1\n"
+      << "# machine: {\"type\":\"TTTRR\",\"name\":\"cli-test\",\"a_pivot_mm\":[0,0,0],\"c_offset_mm\":[0,0,-100],"
+         "\"tool_ball_mm\":[0,0,0]}\n"
+      << "location,point,X_mm,Y_mm,Z_mm,A_deg,C_deg,socket_x_mm,socket_y_mm,socket_z_mm,measured_mm\n";
+    const Vec socket{100, 0, 20}, c_off{0, 0, -100}, d{x0c_mm, y0c_mm, 0};
+    const double pi = 3.141592653589793, cone = 0.9553166181245093;
+    int loc = 0;
+    for (double a_deg : {-60.0, -30.0, 0.0, 30.0, 60.0})
+        for (double c_deg : {0.0, 60.0, 120.0, 180.0, 240.0, 300.0}) {
+            const double a = a_deg * pi / 180, c = c_deg * pi / 180;
+            const Vec s_nom = rx(a, add(c_off, rz(c, socket)));
+            const Vec s_act = rx(a, add(add(c_off, d), rz(c, sub(socket, d))));
+            for (int k = 0; k < 3; ++k) {
+                const double az = 2 * pi * k / 3;
+                const Vec b = add(s_nom, Vec{100 * std::sin(cone) * std::cos(az), 100 * std::sin(cone) * std::sin(az),
+                                             100 * std::cos(cone)});
+                f << loc << ',' << k << ',' << b.x << ',' << b.y << ',' << b.z << ',' << a_deg << ',' << c_deg << ','
+                  << socket.x << ',' << socket.y << ',' << socket.z << ',' << norm(sub(b, s_act)) << '\n';
+            }
+            ++loc;
+        }
+    return f.str();
+}
+
+TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
+    TempDir d;
+    std::ofstream(d.path / "r.csv") << readings_file(0.03, -0.02);
+    const Run r = run(d, "identify '" + (d.path / "r.csv").string() + "' --params X0C,Y0C,C_zero --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json a = json::parse(r.out);
+    EXPECT_TRUE(a["converged"].get<bool>());
+    std::map<std::string, json> est;
+    for (const auto& e : a["estimates"]) est[e["name"].get<std::string>()] = e;
+    EXPECT_NEAR(est["X0C"]["estimate"].get<double>(), 0.03, 1e-7);
+    EXPECT_NEAR(est["Y0C"]["estimate"].get<double>(), -0.02, 1e-7);
+    EXPECT_FALSE(est["C_zero"]["observable"].get<bool>());  // a turn of the socket is a socket offset
+    EXPECT_LT(a["residual_rms_um"].get<double>(), 1e-3);
+    ASSERT_TRUE(a.contains("model_id"));
+    EXPECT_EQ(a["model"]["format"], "ballbar-model/1");
+
+    // The stored model compensates a program; the largest correction is the C-axis offset's size.
+    std::ofstream(d.path / "in.nc") << "%\nO0001\nG90\nG1 X50 Y0 Z30 A30 C0 F1000\nG1 X0 Y50 A30 C90\n"
+                                       "G1 X10 Y10 Z10 A0 C45\n%\n";
+    const Run c = run(d, "compensate --model " + std::to_string(a["model_id"].get<long>()) + " --program '" +
+                             (d.path / "in.nc").string() + "' --out '" + (d.path / "out.nc").string() + "' --json");
+    ASSERT_EQ(c.code, 0) << c.err;
+    const json cj = json::parse(c.out);
+    EXPECT_EQ(cj["compensated"], 3);
+    EXPECT_GT(cj["max_linear_correction_mm"].get<double>(), 0.01);
+    EXPECT_LT(cj["max_linear_correction_mm"].get<double>(), 0.1);
+    EXPECT_EQ(cj["singular_blocks"], 1);  // A = 0: C is parallel to the tool
+    EXPECT_EQ(cj["singular_lines"][0], 6);
+    const std::string out = slurp(d.path / "out.nc");
+    EXPECT_NE(out.find("G1"), std::string::npos);
+
+    // The same with the model as a file, and a refused model.
+    std::ofstream(d.path / "model.json") << a["model"].dump();
+    EXPECT_EQ(run(d, "compensate --model '" + (d.path / "model.json").string() + "' --program '" +
+                         (d.path / "in.nc").string() + "' --out '" + (d.path / "out2.nc").string() + "'")
+                  .code,
+              0);
+    std::ofstream(d.path / "bad.json") << R"({"machine":{"type":"TTTRR","a_pivot_mm":[0,0,0],"c_offset_mm":[0,0,0],)"
+                                       << R"("tool_ball_mm":[0,0,0]},"params":{"X9Q":1}})";
+    const Run bad = run(d, "compensate --model '" + (d.path / "bad.json").string() + "' --program '" +
+                               (d.path / "in.nc").string() + "' --out '" + (d.path / "out3.nc").string() + "'");
+    EXPECT_EQ(bad.code, 2);
+    EXPECT_NE(bad.err.find("X9Q"), std::string::npos) << bad.err;
+}
+
+TEST(CliIdentify, RefusesUnknownInputs) {
+    TempDir d;
+    const Run r = run(d, "identify no-such-thing");
+    EXPECT_EQ(r.code, 2) << r.err;
+    std::ofstream(d.path / "r.csv") << readings_file(0, 0);
+    const Run p = run(d, "identify '" + (d.path / "r.csv").string() + "' --params X0C,NOPE");
+    EXPECT_EQ(p.code, 2);
+    EXPECT_NE(p.err.find("NOPE"), std::string::npos) << p.err;
+}
+
+// ---- the proof ------------------------------------------------------------------------------
+
+TEST(CliDemoCompensate, ImprovesEveryAxisAtLeastFiveTimes) {
+    TempDir d;
+    const Run r = run(d, "demo-compensate --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json a = json::parse(r.out);
+    for (const char* axis : {"X", "Y", "Z"}) {
+        EXPECT_GE(a["improvement"][axis].get<double>(), 5.0) << axis;
+        EXPECT_GT(a["rms_before_um"][axis].get<double>(), 1.0) << axis;  // there was something to fix
+    }
+    ASSERT_FALSE(a["identified"].empty());
+    for (const auto& p : a["identified"]) {
+        ASSERT_TRUE(p.contains("name") && p.contains("estimate") && p.contains("true") && p.contains("std"));
+    }
+    EXPECT_TRUE(a["residual_um"].contains("X"));
+}
+
+}  // namespace
