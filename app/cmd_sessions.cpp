@@ -2,6 +2,7 @@
 // `ballbar sessions [--json]` lists the stored sessions; `ballbar sessions show SESSION [--json]` shows
 // one (SESSION: id or uuid prefix) with its audit trail, points summary and results.
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 
 #include "ballbar/storage/session_export.hpp"
@@ -30,6 +31,11 @@ std::string machine_label(const analysis::MachineGeometry& m) {
 }
 
 int list_sessions(const SessionsOptions& o, const Globals& globals) {
+    const std::string path = resolve_db_path(globals);
+    if (!std::filesystem::exists(path)) {  // listing does not create a database
+        std::cout << (o.json ? "[]" : "no sessions (no database at " + path + ")") << '\n';
+        return kExitOk;
+    }
     auto store = open_reader(globals);
     if (o.json) {
         std::cout << storage::sessions_json(store) << '\n';

@@ -100,6 +100,10 @@ TEST(CliStorage, InvalidFileExitsTwoWithLineAndImportsNothing) {
 
 TEST(CliStorage, SessionsListsAndShows) {
     TempDir d;
+    const CliRun none = run(d, "sessions --json");
+    EXPECT_EQ(none.code, 0) << none.err;
+    EXPECT_EQ(json::parse(none.out).size(), 0u);
+    EXPECT_FALSE(fs::exists(d.file("test.db"))) << "listing does not create a database";
     ASSERT_EQ(run(d, "import '" + kData + "rrttt_minimal.csv'").code, 0);
     ASSERT_EQ(run(d, "import '" + kData + "rtttr_nominal_mismatch.csv'").code, 0);
     const CliRun list = run(d, "sessions --json");
