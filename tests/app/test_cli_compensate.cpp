@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
+struct CliRun {
     int code = -1;
     std::string out, err;
 };
@@ -45,25 +45,27 @@ struct TempDir {
 };
 
 /// Runs `ballbar <args>` with `input` on stdin (in `dir`); captures stdout, stderr and the exit code.
-Run run(const TempDir& dir, const std::string& args, const std::string& input = "") {
+CliRun run(const TempDir& dir, const std::string& args, const std::string& input = "") {
     std::ofstream(dir.path / "stdin") << input;
     const std::string cmd = std::string("'") + BALLBAR_EXE + "' --db '" + (dir.path / "test.db").string() + "' " +
                             args + " <'" + (dir.path / "stdin").string() + "' >'" + (dir.path / "stdout").string() +
                             "' 2>'" + (dir.path / "stderr").string() + "'";
     const int status = std::system(cmd.c_str());
-    Run r;
+    CliRun r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.out = slurp(dir.path / "stdout");
     r.err = slurp(dir.path / "stderr");
     return r;
 }
 
-void expect_field_error(const Run& r, const std::string& field) {
+void expect_field_error(const CliRun& r, const std::string& field) {
     EXPECT_EQ(r.code, 2) << r.err;
     json e;
     ASSERT_NO_THROW(e = json::parse(r.err)) << r.err;
     EXPECT_TRUE(e.contains("error"));
-    if (!field.empty()) EXPECT_EQ(e.value("field", ""), field) << r.err;
+    if (!field.empty()) {
+        EXPECT_EQ(e.value("field", ""), field) << r.err;
+    }
 }
 
 // ---- solve compensate -------------------------------------------------------------------------
@@ -74,7 +76,7 @@ TEST(CliSolveCompensate, AnswersWithFirstOrderAndExactCorrections) {
                    {"offsets_mm", {{"Xw0", 10}, {"Yw0", -5}, {"Zw0", 2}, {"Z3", 150}}},
                    {"u", {40, -25, 120, 0.5, 0.8}},
                    {"dv", {0.01, -0.02, 0.005, 2e-5, -1e-5, 1e-5}}};
-    const Run r = run(d, "solve compensate", req.dump());
+    const CliRun r = run(d, "solve compensate", req.dump());
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
     ASSERT_EQ(a["du"].size(), 5u);
@@ -92,7 +94,7 @@ TEST(CliSolveCompensate, AnswersWithFirstOrderAndExactCorrections) {
 TEST(CliSolveCompensate, SingularPoseHasNoCCorrection) {
     TempDir d;
     const json req{{"kinematics", "lei-hsu"}, {"u", {40, -25, 120, 0.0, 0.8}}, {"dv", {0.01, 0, 0, 2e-5, 1e-5, 0}}};
-    const Run r = run(d, "solve compensate", req.dump());
+    const CliRun r = run(d, "solve compensate", req.dump());
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
     EXPECT_TRUE(a["singular"].get<bool>());
@@ -178,7 +180,7 @@ std::string readings_file(double x0c_mm, double y0c_mm) {
 TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
     TempDir d;
     std::ofstream(d.path / "r.csv") << readings_file(0.03, -0.02);
-    const Run r = run(d, "identify '" + (d.path / "r.csv").string() + "' --params X0C,Y0C,C_zero --json");
+    const CliRun r = run(d, "identify '" + (d.path / "r.csv").string() + "' --params X0C,Y0C,C_zero --json");
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
     EXPECT_TRUE(a["converged"].get<bool>());
@@ -194,8 +196,8 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
     // The stored model compensates a program; the largest correction is the C-axis offset's size.
     std::ofstream(d.path / "in.nc") << "%\nO0001\nG90\nG1 X50 Y0 Z30 A30 C0 F1000\nG1 X0 Y50 A30 C90\n"
                                        "G1 X10 Y10 Z10 A0 C45\n%\n";
-    const Run c = run(d, "compensate --model " + std::to_string(a["model_id"].get<long>()) + " --program '" +
-                             (d.path / "in.nc").string() + "' --out '" + (d.path / "out.nc").string() + "' --json");
+    const CliRun c = run(d, "compensate --model " + std::to_string(a["model_id"].get<long>()) + " --program '" +
+                                (d.path / "in.nc").string() + "' --out '" + (d.path / "out.nc").string() + "' --json");
     ASSERT_EQ(c.code, 0) << c.err;
     const json cj = json::parse(c.out);
     EXPECT_EQ(cj["compensated"], 3);
@@ -214,18 +216,18 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
               0);
     std::ofstream(d.path / "bad.json") << R"({"machine":{"type":"TTTRR","a_pivot_mm":[0,0,0],"c_offset_mm":[0,0,0],)"
                                        << R"("tool_ball_mm":[0,0,0]},"params":{"X9Q":1}})";
-    const Run bad = run(d, "compensate --model '" + (d.path / "bad.json").string() + "' --program '" +
-                               (d.path / "in.nc").string() + "' --out '" + (d.path / "out3.nc").string() + "'");
+    const CliRun bad = run(d, "compensate --model '" + (d.path / "bad.json").string() + "' --program '" +
+                                  (d.path / "in.nc").string() + "' --out '" + (d.path / "out3.nc").string() + "'");
     EXPECT_EQ(bad.code, 2);
     EXPECT_NE(bad.err.find("X9Q"), std::string::npos) << bad.err;
 }
 
 TEST(CliIdentify, RefusesUnknownInputs) {
     TempDir d;
-    const Run r = run(d, "identify no-such-thing");
+    const CliRun r = run(d, "identify no-such-thing");
     EXPECT_EQ(r.code, 2) << r.err;
     std::ofstream(d.path / "r.csv") << readings_file(0, 0);
-    const Run p = run(d, "identify '" + (d.path / "r.csv").string() + "' --params X0C,NOPE");
+    const CliRun p = run(d, "identify '" + (d.path / "r.csv").string() + "' --params X0C,NOPE");
     EXPECT_EQ(p.code, 2);
     EXPECT_NE(p.err.find("NOPE"), std::string::npos) << p.err;
 }
@@ -234,7 +236,7 @@ TEST(CliIdentify, RefusesUnknownInputs) {
 
 TEST(CliDemoCompensate, ImprovesEveryAxisAtLeastFiveTimes) {
     TempDir d;
-    const Run r = run(d, "demo-compensate --json");
+    const CliRun r = run(d, "demo-compensate --json");
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
     for (const char* axis : {"X", "Y", "Z"}) {
