@@ -255,6 +255,9 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         std::ostringstream ss;
         code = run_compensation_demo(co, ss, true);
         out["compensation"] = json::parse(ss.str());
+        // Issue 6's shape at the top level too: improvement, residual_um, identified (and rms_before_um).
+        for (const char* key : {"improvement", "rms_before_um", "residual_um", "identified"})
+            out[key] = out["compensation"][key];
     }
 #else
     if (o.compensate) throw CliError(kExitFailure, "--compensate: this build has no compensation demo");

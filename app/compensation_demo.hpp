@@ -3,8 +3,8 @@
 // (rotary-block location errors dominant, as Lei & Hsu found), the identification plan measured on
 // it with 0.1 µm-class bar noise, the identified model, a test path compensated through the model's
 // inverse Jacobian, written as an NC program, run on the emulated machine, and the tool-ball error
-// relative to the table before and after, per axis. `ballbar demo-compensate` and
-// `ballbar demo --compensate` both call run_compensation_demo.
+// relative to the table before and after, per axis. `ballbar demo --compensate` calls
+// run_compensation_demo.
 #pragma once
 
 #include <cstdint>

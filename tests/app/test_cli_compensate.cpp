@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Whole-process tests of issue 6's commands: `ballbar solve compensate`, `ballbar identify`,
-// `ballbar compensate` and the proof `ballbar demo-compensate`.
+// `ballbar compensate` and the proof `ballbar demo --compensate`.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -236,7 +236,7 @@ TEST(CliIdentify, RefusesUnknownInputs) {
 
 TEST(CliDemoCompensate, ImprovesEveryAxisAtLeastFiveTimes) {
     TempDir d;
-    const CliRun r = run(d, "demo-compensate --json");
+    const CliRun r = run(d, "demo --machine TTTRR --compensate --json");
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
     for (const char* axis : {"X", "Y", "Z"}) {

@@ -25,7 +25,7 @@ namespace ballbar::device {
 
 /// Host-side sample flag (not on the wire): samples were lost right before this one (device frames
 /// missing, corrupt frames dropped, or this queue overflowing).
-constexpr std::uint16_t kSampleAfterGap = 1u << 8;
+using analysis::kSampleAfterGap;  // analysis/sample.hpp: host-only flag of the first sample after a gap
 
 struct InstrumentInfo {
     int protocol_version = 0;
