@@ -15,48 +15,14 @@
 #include <sstream>
 #include <string>
 
+#include "cli_harness.hpp"
+
 using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int code = -1;
-    std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-/// A scratch directory removed at the end of the test.
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        char tmpl[] = "/tmp/ballbar-cli-comp-XXXXXX";
-        const char* d = ::mkdtemp(tmpl);
-        if (!d) throw std::runtime_error("mkdtemp");
-        path = d;
-    }
-    ~TempDir() { fs::remove_all(path); }
-};
-
-/// Runs `ballbar <args>` with `input` on stdin (in `dir`); captures stdout, stderr and the exit code.
-CliRun run(const TempDir& dir, const std::string& args, const std::string& input = "") {
-    std::ofstream(dir.path / "stdin") << input;
-    const std::string cmd = std::string("'") + BALLBAR_EXE + "' --db '" + (dir.path / "test.db").string() + "' " +
-                            args + " <'" + (dir.path / "stdin").string() + "' >'" + (dir.path / "stdout").string() +
-                            "' 2>'" + (dir.path / "stderr").string() + "'";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(dir.path / "stdout");
-    r.err = slurp(dir.path / "stderr");
-    return r;
-}
+using namespace ballbar::test;
 
 void expect_field_error(const CliRun& r, const std::string& field) {
     EXPECT_EQ(r.code, 2) << r.err;

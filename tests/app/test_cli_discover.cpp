@@ -14,45 +14,14 @@
 #include <sstream>
 #include <string>
 
+#include "cli_harness.hpp"
+
 using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int code = -1;
-    std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        char tmpl[] = "/tmp/ballbar-cli-discover-XXXXXX";
-        const char* d = ::mkdtemp(tmpl);
-        EXPECT_NE(d, nullptr);
-        path = d ? d : "/tmp";
-    }
-    ~TempDir() { fs::remove_all(path); }
-};
-
-CliRun run(const TempDir& dir, const std::string& args) {
-    const std::string cmd = std::string("'") + BALLBAR_EXE + "' --db '" + (dir.path / "db.sqlite").string() + "' " +
-                            args + " </dev/null >'" + (dir.path / "out").string() + "' 2>'" +
-                            (dir.path / "err").string() + "'";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(dir.path / "out");
-    r.err = slurp(dir.path / "err");
-    return r;
-}
+using namespace ballbar::test;
 
 std::string data(const std::string& name) {
     return std::string(BALLBAR_TEST_DATA_DIR) + "/readings/" + name;
@@ -130,7 +99,7 @@ TEST(CliDiscover, StoresResultAndModelHistoryWithTheSession) {
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(json::parse(r.out)["steps"][0]["effect"], "spindle_thermal_growth");
     // The database holds the result and two model versions (base, + spindle growth).
-    const std::string q = "sqlite3 '" + (dir.path / "db.sqlite").string() + "' ";
+    const std::string q = "sqlite3 '" + dir.file("test.db") + "' ";
     const std::string cmd =
         q + "\"select count(*) from results where kind='discovery';\" > '" + (dir.path / "q").string() + "' 2>&1";
     if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "no sqlite3 shell";

@@ -11,48 +11,16 @@
 #include <sstream>
 #include <string>
 
+#include "cli_harness.hpp"
+
 namespace cli_storage {
 namespace {
 
+using namespace ballbar::test;
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 const std::string kData = std::string(BALLBAR_TEST_DATA_DIR) + "/readings/";
-
-struct CliRun {
-    int code = -1;
-    std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        char tmpl[] = "/tmp/ballbar-cli-store-XXXXXX";
-        const char* d = ::mkdtemp(tmpl);
-        if (!d) throw std::runtime_error("mkdtemp");
-        path = d;
-    }
-    ~TempDir() { fs::remove_all(path); }
-    std::string file(const std::string& name) const { return (path / name).string(); }
-};
-
-CliRun run(const TempDir& dir, const std::string& args) {
-    const std::string cmd = std::string("'") + BALLBAR_EXE + "' --db '" + dir.file("test.db") + "' " + args +
-                            " </dev/null >'" + dir.file("stdout") + "' 2>'" + dir.file("stderr") + "'";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(dir.path / "stdout");
-    r.err = slurp(dir.path / "stderr");
-    return r;
-}
 
 TEST(CliStorage, ImportExportImportRoundTripsWithoutLoss) {
     TempDir d;
