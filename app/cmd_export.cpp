@@ -10,6 +10,7 @@
 #include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
+#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -56,10 +57,7 @@ int run_export(const ExportOptions& o, const Globals& globals) {
             std::cerr << "ballbar: exported session " << id << " (" << o.format << ") to " << o.out << '\n';
         return kExitOk;
     } catch (const storage::StorageError& e) {
-        const bool usage = e.kind() == storage::StorageError::Kind::not_found ||
-                           (e.kind() == storage::StorageError::Kind::invalid &&
-                            std::string(e.what()).find("ambiguous") != std::string::npos);
-        throw CliError(usage ? kExitUsage : kExitFailure, e.what());
+        throw cli_error(e);
     }
 }
 

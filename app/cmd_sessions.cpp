@@ -8,6 +8,7 @@
 #include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
+#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -100,10 +101,7 @@ int run(const SessionsOptions& o, const Globals& globals, bool show) {
     try {
         return show ? show_session(o, globals) : list_sessions(o, globals);
     } catch (const storage::StorageError& e) {
-        const bool usage = e.kind() == storage::StorageError::Kind::not_found ||
-                           (e.kind() == storage::StorageError::Kind::invalid &&
-                            std::string(e.what()).find("ambiguous") != std::string::npos);
-        throw CliError(usage ? kExitUsage : kExitFailure, e.what());
+        throw cli_error(e);
     }
 }
 

@@ -95,7 +95,7 @@ std::int64_t Store::find_session(std::string_view key) {
     if (!st.step()) throw StorageError(Kind::not_found, "no session \"" + std::string(key) + "\"");
     const std::int64_t id = st.column_int(0);
     if (st.step()) {
-        throw StorageError(Kind::invalid, "session \"" + std::string(key) + "\" is ambiguous: give more of the uuid");
+        throw StorageError(Kind::not_found, "session \"" + std::string(key) + "\" is ambiguous: give more of the uuid");
     }
     return id;
 }
@@ -247,6 +247,10 @@ std::vector<ResultRecord> Store::results(std::int64_t session_id) {
     return out;
 }
 
+/// The columns read_model reads, in its order.
+constexpr std::string_view kModelSelect =
+    "SELECT id, name, version, parent_id, params_json, notes, created_at FROM models ";
+
 ModelRecord Store::read_model(Statement& st) {
     ModelRecord m;
     m.id = st.column_int(0);
@@ -285,17 +289,14 @@ ModelRecord Store::save_model(std::string_view name, std::string_view params_jso
 }
 
 ModelRecord Store::model(std::int64_t model_id) {
-    auto st =
-        db_.prepare("SELECT id, name, version, parent_id, params_json, notes, created_at FROM models WHERE id = ?");
+    auto st = db_.prepare(std::string(kModelSelect) + "WHERE id = ?");
     st.bind(1, model_id);
     if (!st.step()) throw StorageError(Kind::not_found, "no model " + std::to_string(model_id));
     return read_model(st);
 }
 
 std::vector<ModelRecord> Store::model_history(std::string_view name) {
-    auto st = db_.prepare(
-        "SELECT id, name, version, parent_id, params_json, notes, created_at FROM models WHERE name = ? "
-        "ORDER BY version");
+    auto st = db_.prepare(std::string(kModelSelect) + "WHERE name = ? ORDER BY version");
     st.bind(1, name);
     std::vector<ModelRecord> out;
     while (st.step()) out.push_back(read_model(st));
@@ -303,9 +304,7 @@ std::vector<ModelRecord> Store::model_history(std::string_view name) {
 }
 
 std::optional<ModelRecord> Store::latest_model(std::string_view name) {
-    auto st = db_.prepare(
-        "SELECT id, name, version, parent_id, params_json, notes, created_at FROM models WHERE name = ? "
-        "ORDER BY version DESC LIMIT 1");
+    auto st = db_.prepare(std::string(kModelSelect) + "WHERE name = ? ORDER BY version DESC LIMIT 1");
     st.bind(1, name);
     if (!st.step()) return std::nullopt;
     return read_model(st);

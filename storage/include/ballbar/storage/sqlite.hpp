@@ -25,7 +25,7 @@ class StorageError : public std::runtime_error {
         corrupt,       ///< not a database, truncated or damaged (SQLITE_CORRUPT / SQLITE_NOTADB)
         newer_schema,  ///< written by a newer ballbar; left untouched
         busy,          ///< another connection held a lock longer than the busy timeout
-        not_found,     ///< no such session / model / …
+        not_found,     ///< no such session / model / …, or a key that matches more than one
         invalid,       ///< a request that contradicts the stored state (illegal state transition, …)
     };
     StorageError(Kind kind, const std::string& message, int sqlite_code = 0)
