@@ -9,7 +9,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <iterator>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -48,7 +47,10 @@ struct Model {
 std::string read_text(const std::string& path, const char* what) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw CliError(kExitUsage, std::string("cannot read ") + what + " " + path);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    std::ostringstream text;  // one bulk copy: a million-block program is ~50 MB
+    text << in.rdbuf();
+    if (in.bad()) throw CliError(kExitUsage, std::string("read failed: ") + what + " " + path);
+    return std::move(text).str();
 }
 
 Model parse_model(const std::string& text, const std::string& source) {
@@ -114,59 +116,90 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     const Model model = load_model(args.model, globals);
     const ba::NcDialect dialect = pick_dialect(args);
     const std::string text = read_text(args.program, "program");
-    ba::NcProgram prog;
-    try {
-        prog = ba::parse_nc_program(text, dialect);
-    } catch (const ba::NcError& e) {
-        throw CliError(kExitUsage, args.program + ": " + e.what());
-    }
-    const std::vector<ba::Pose> poses = ba::resolve_poses(prog);
     ba::CompensationOptions co;
     co.singular_tolerance = std::sin(ba::deg_to_rad(args.singular_deg));
     const ba::Compensator comp(model.machine, model.params, co);
     const bool second_is_c = ba::rotary_axes(model.machine.type).second == 'C';
 
+    // Streams: one block is parsed, compensated and written at a time, and the output goes to a
+    // temporary file in chunks, renamed over --out only when the whole program is done (a program
+    // with an error leaves no half-written output behind).
+    const std::filesystem::path out_path(args.out);
+    std::filesystem::path tmp_path = out_path;
+    tmp_path += ".part";
+    std::ofstream out(tmp_path, std::ios::binary | std::ios::trunc);
+    if (!out) throw CliError(kExitFailure, "cannot write " + args.out);
+    std::string chunk;
+    constexpr std::size_t kChunkBytes = 1 << 20;
+    chunk.reserve(kChunkBytes + 4096);
+    auto flush = [&] {
+        out.write(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+        chunk.clear();
+        if (!out) {
+            std::error_code ec;
+            std::filesystem::remove(tmp_path, ec);
+            throw CliError(kExitFailure, "write failed: " + args.out);
+        }
+    };
+
+    std::size_t blocks = 0;
     std::size_t compensated = 0;
     double max_linear = 0, max_rotary = 0;
     int max_linear_line = 0, max_rotary_line = 0;
     std::vector<int> singular_lines;
     std::size_t singular_count = 0;
-    for (std::size_t i = 0; i < prog.blocks.size(); ++i) {
-        ba::NcBlock& b = prog.blocks[i];
-        if (b.motion != ba::NcMotion::Rapid && b.motion != ba::NcMotion::Feed) continue;
-        const ba::Correction c = args.exact ? comp.exact(poses[i]) : comp.first_order(poses[i]);
-        const double lin = std::sqrt(c.du[0] * c.du[0] + c.du[1] * c.du[1] + c.du[2] * c.du[2]);
-        const double rot = std::max(std::abs(c.du[3]), std::abs(c.du[4]));
-        if (lin > max_linear) {
-            max_linear = lin;
-            max_linear_line = b.line;
+    ba::write_nc_header(chunk, dialect, "compensated by ballbar with " + model.source);
+    try {
+        ba::NcReader reader(text, dialect);
+        ba::NcBlock b;
+        ba::Pose pose;  // modal: the absolute commanded pose after each block
+        while (reader.next(b)) {
+            ++blocks;
+            pose = ba::pose_after(b, pose);
+            if (b.motion == ba::NcMotion::Rapid || b.motion == ba::NcMotion::Feed) {
+                const ba::Correction c = args.exact ? comp.exact(pose) : comp.first_order(pose);
+                const double lin = std::sqrt(c.du[0] * c.du[0] + c.du[1] * c.du[1] + c.du[2] * c.du[2]);
+                const double rot = std::max(std::abs(c.du[3]), std::abs(c.du[4]));
+                if (lin > max_linear) {
+                    max_linear = lin;
+                    max_linear_line = b.line;
+                }
+                if (rot > max_rotary) {
+                    max_rotary = rot;
+                    max_rotary_line = b.line;
+                }
+                if (c.singular) {
+                    ++singular_count;
+                    if (singular_lines.size() < 20) singular_lines.push_back(b.line);
+                }
+                b.X_mm = c.commanded.X_mm;
+                b.Y_mm = c.commanded.Y_mm;
+                b.Z_mm = c.commanded.Z_mm;
+                b.A_rad = c.commanded.A_rad;
+                if (second_is_c)
+                    b.C_rad = c.commanded.C_rad;
+                else
+                    b.B_rad = c.commanded.B_rad;
+                ++compensated;
+            }
+            ba::write_nc_block(chunk, b, dialect);
+            if (chunk.size() >= kChunkBytes) flush();
         }
-        if (rot > max_rotary) {
-            max_rotary = rot;
-            max_rotary_line = b.line;
-        }
-        if (c.singular) {
-            ++singular_count;
-            if (singular_lines.size() < 20) singular_lines.push_back(b.line);
-        }
-        b.X_mm = c.commanded.X_mm;
-        b.Y_mm = c.commanded.Y_mm;
-        b.Z_mm = c.commanded.Z_mm;
-        b.A_rad = c.commanded.A_rad;
-        if (second_is_c)
-            b.C_rad = c.commanded.C_rad;
-        else
-            b.B_rad = c.commanded.B_rad;
-        ++compensated;
+    } catch (const ba::NcError& e) {
+        out.close();
+        std::error_code ec;
+        std::filesystem::remove(tmp_path, ec);
+        throw CliError(kExitUsage, args.program + ": " + e.what());
     }
-    {
-        std::ofstream out(args.out, std::ios::binary | std::ios::trunc);
-        if (!out) throw CliError(kExitFailure, "cannot write " + args.out);
-        out << ba::write_nc_program(prog, "compensated by ballbar with " + model.source);
-        if (!out) throw CliError(kExitFailure, "write failed: " + args.out);
-    }
+    ba::write_nc_footer(chunk, dialect);
+    flush();
+    out.close();
+    if (!out) throw CliError(kExitFailure, "write failed: " + args.out);
+    std::error_code ec;
+    std::filesystem::rename(tmp_path, out_path, ec);
+    if (ec) throw CliError(kExitFailure, "cannot write " + args.out + ": " + ec.message());
     if (args.json) {
-        json j{{"blocks", prog.blocks.size()},
+        json j{{"blocks", blocks},
                {"compensated", compensated},
                {"method", args.exact ? "exact" : "first-order"},
                {"max_linear_correction_mm", max_linear},
@@ -178,7 +211,7 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
                {"out", args.out}};
         std::cout << j.dump(2) << '\n';
     } else {
-        std::cout << "compensated " << compensated << " of " << prog.blocks.size() << " blocks ("
+        std::cout << "compensated " << compensated << " of " << blocks << " blocks ("
                   << (args.exact ? "exact" : "first-order") << ") -> " << args.out << '\n'
                   << "largest correction: " << max_linear * 1e3 << " um linear (line " << max_linear_line << "), "
                   << ba::rad_to_deg(max_rotary) * 3600.0 << " arcsec rotary (line " << max_rotary_line << ")\n";

@@ -14,9 +14,32 @@ Mat3 cross_matrix(const Vec3& d) {
     return k;
 }
 
+// Rotations about the coordinate axes by the angle with cosine c and sine s (and their inverses, _t),
+// component-wise: the nominal machine's rotary axes are coordinate axes.
+inline Vec3 rot_x(double c, double s, const Vec3& v) {
+    return {v.x(), c * v.y() - s * v.z(), s * v.y() + c * v.z()};
+}
+inline Vec3 rot_x_t(double c, double s, const Vec3& v) {
+    return {v.x(), c * v.y() + s * v.z(), -s * v.y() + c * v.z()};
+}
+inline Vec3 rot_y(double c, double s, const Vec3& v) {
+    return {c * v.x() + s * v.z(), v.y(), -s * v.x() + c * v.z()};
+}
+inline Vec3 rot_z(double c, double s, const Vec3& v) {
+    return {c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()};
+}
+inline Vec3 rot_z_t(double c, double s, const Vec3& v) {
+    return {c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()};
+}
+
+// Only TTTRR's second rotary axis is C (rotary_axes(), without a call per pose).
+constexpr bool second_is_c(MachineType type) {
+    return type == MachineType::TTTRR;
+}
+
 double rotary_angle(MachineType type, const Pose& p, int which) {
     if (which == 0) return p.A_rad;
-    return rotary_axes(type).second == 'C' ? p.C_rad : p.B_rad;
+    return second_is_c(type) ? p.C_rad : p.B_rad;
 }
 
 double angle_between(const Vec3& a, const Vec3& b) {
@@ -28,8 +51,13 @@ double angle_between(const Vec3& a, const Vec3& b) {
 Mat3 MachineModel::Axis::rotation(double c0, double s0) const {
     const double c = c0 * cos_zero - s0 * sin_zero;  // cos(angle + zero offset)
     const double s = s0 * cos_zero + c0 * sin_zero;
-    Mat3 r = (1.0 - c) * outer + s * cross;
-    r.diagonal().array() += c;
+    // c·I + s·[d]× + (1 − c)·d·dᵀ, entry by entry ([d]× has a zero diagonal).
+    const double k = 1.0 - c;
+    const double sx = s * dir.x(), sy = s * dir.y(), sz = s * dir.z();
+    Mat3 r;
+    r << c + k * outer(0, 0), k * outer(0, 1) - sz, k * outer(0, 2) + sy,  //
+        k * outer(1, 0) + sz, c + k * outer(1, 1), k * outer(1, 2) - sx,   //
+        k * outer(2, 0) - sy, k * outer(2, 1) + sx, c + k * outer(2, 2);
     return r;
 }
 
@@ -62,6 +90,17 @@ MachineModel::MachineModel(const MachineGeometry& geom, const ErrorParams& e) : 
             second_ = make(Vec3(e[Param::X0B], 0, e[Param::Z0B]), b_axis_dir(e), e[Param::B_zero]);
             break;
     }
+    switch (geom.type) {
+        case MachineType::TTTRR:
+            chain_ = second_.point - first_.point;
+            base_ = geom.a_pivot_mm + geom.c_offset_mm - second_.point;
+            break;
+        case MachineType::RTTTR:
+            base_ = geom.a_pivot_mm - first_.point;
+            break;
+        case MachineType::RRTTT:
+            break;
+    }
 }
 
 MachineModel::Trig MachineModel::trig(MachineType type, const Pose& pose) {
@@ -75,40 +114,30 @@ ToolPose MachineModel::tool_pose(const Pose& pose) const {
 }
 
 ToolPose MachineModel::tool_pose(const Pose& pose, const Trig& tr) const {
+    // Rotation matrices are built once per pose and applied to vectors; their products are never
+    // formed (two matrix products cost more than the four matrix-vector products they save).
     const Vec3 pivot = detail::linear_axes(e_, pose);
     const Mat3 ra = first_.rotation(tr.c1, tr.s1);
     const Mat3 rb = second_.rotation(tr.c2, tr.s2);
-    Mat3 rt = Mat3::Identity();  // table frame → machine
-    Vec3 t = Vec3::Zero();
-    Vec3 ball = Vec3::Zero();
-    Vec3 dir = Vec3::UnitZ();
     switch (geom_.type) {
         case MachineType::TTTRR: {
-            const Vec3& qa = first_.point;
-            const Vec3& qc = second_.point;
-            rt = ra * rb;
-            t = qa + ra * (qc - qa + rb * (geom_.a_pivot_mm + geom_.c_offset_mm - qc));
-            ball = pivot + tool_mm_;
-            break;
+            // Table point x ↦ qa + Ra(qc − qa + Rc(x + p0 − qc)); inverted for the tool ball.
+            const Vec3 ball = pivot + tool_mm_;
+            const Vec3 in_a = ra.transpose() * (ball - first_.point) - chain_;
+            return {rb.transpose() * in_a - base_, rb.transpose() * ra.row(2).transpose()};
         }
         case MachineType::RRTTT: {
             const Vec3 qa = pivot + first_.point;
             const Vec3 qb = pivot + second_.point;
-            ball = qa + ra * (qb - qa + rb * (pivot + tool_mm_ - qb));
-            dir = ra * (rb * Vec3::UnitZ());
-            break;
+            return {qa + ra * (qb - qa + rb * (pivot + tool_mm_ - qb)), ra * rb.col(2)};
         }
         case MachineType::RTTTR: {
-            const Vec3& qa = first_.point;
             const Vec3 qb = pivot + second_.point;
-            rt = ra;
-            t = qa + ra * (geom_.a_pivot_mm - qa);
-            ball = qb + rb * (pivot + tool_mm_ - qb);
-            dir = rb * Vec3::UnitZ();
-            break;
+            const Vec3 ball = qb + rb * (pivot + tool_mm_ - qb);
+            return {ra.transpose() * (ball - first_.point) - base_, ra.transpose() * rb.col(2)};
         }
     }
-    return {rt.transpose() * (ball - t), rt.transpose() * dir};
+    return {};
 }
 
 Pose add_correction(MachineType type, const Pose& u, const std::array<double, 5>& du) {
@@ -117,7 +146,7 @@ Pose add_correction(MachineType type, const Pose& u, const std::array<double, 5>
     out.Y_mm += du[1];
     out.Z_mm += du[2];
     out.A_rad += du[3];
-    if (rotary_axes(type).second == 'C')
+    if (second_is_c(type))
         out.C_rad += du[4];
     else
         out.B_rad += du[4];
@@ -132,51 +161,70 @@ Compensator::Compensator(const MachineGeometry& geom, const ErrorParams& e, Comp
 }
 
 Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& tr) const {
-    // A table axis turns the workpiece under the tool (sign −), a head axis turns the tool (sign +).
+    // The nominal axes are coordinate axes, so the rotations are applied component-wise. A table
+    // axis turns the workpiece under the tool (sign −), a head axis turns the tool (sign +). The
+    // Jacobian columns rtᵀ(k × v) are formed in the table frame as (rtᵀk) × (rtᵀv).
     const MachineGeometry& g = nominal_.geometry();
-    Mat3 rx, r2;
-    rx << 1, 0, 0, 0, tr.c1, -tr.s1, 0, tr.s1, tr.c1;
-    if (g.type == MachineType::TTTRR)
-        r2 << tr.c2, -tr.s2, 0, tr.s2, tr.c2, 0, 0, 0, 1;  // Rz(C)
-    else
-        r2 << tr.c2, 0, tr.s2, 0, 1, 0, -tr.s2, 0, tr.c2;  // Ry(B)
+    const double c1 = tr.c1, s1 = tr.s1, c2 = tr.c2, s2 = tr.s2;
     Frame f;
-    f.rt = Mat3::Identity();
-    f.t = Vec3::Zero();
-    f.ball = u.linear_mm();
-    f.dir = Vec3::UnitZ();
-    struct Line {
-        Vec3 k, p;
-        double sign;
-    } lines[2];
+    f.type = g.type;
+    f.tr = tr;
+    const Vec3 lin = u.linear_mm();
     switch (g.type) {
-        case MachineType::TTTRR:
-            f.rt = rx * r2;
-            f.t = g.a_pivot_mm + rx * g.c_offset_mm;
-            f.ball += g.tool_ball_mm;
-            lines[0] = {Vec3::UnitX(), g.a_pivot_mm, -1};
-            lines[1] = {rx.col(2), f.t, -1};
+        case MachineType::TTTRR: {
+            // rt = Rx(A)·Rz(C), t = a_pivot + Rx(A)·c_offset.
+            const Vec3 v = lin + g.tool_ball_mm - g.a_pivot_mm;             // ball − a_pivot, machine frame
+            const Vec3 va = rot_x_t(c1, s1, v) - g.c_offset_mm;             // Rxᵀ(ball − t)
+            f.position = rot_z_t(c2, s2, va);                               // rtᵀ(ball − t)
+            f.direction = rot_z_t(c2, s2, Vec3(0, s1, c1));                 // rtᵀ e_z
+            const Vec3 kx(c2, -s2, 0);                                      // rtᵀ e_x
+            const Vec3 to_a = f.position + rot_z_t(c2, s2, g.c_offset_mm);  // rtᵀ(ball − a_pivot)
+            f.cw[0] = -kx.cross(to_a);
+            f.cq[0] = -kx.cross(f.direction);
+            // rtᵀ(Rx e_z) = e_z, and −e_z × v = (v.y, −v.x, 0).
+            f.cw[1] = Vec3(f.position.y(), -f.position.x(), 0);
+            f.cq[1] = Vec3(f.direction.y(), -f.direction.x(), 0);
             break;
-        case MachineType::RRTTT:
-            f.dir = rx * r2.col(2);
-            f.ball += rx * (r2 * g.tool_ball_mm);
-            lines[0] = {Vec3::UnitX(), u.linear_mm(), 1};
-            lines[1] = {rx.col(1), u.linear_mm(), 1};
+        }
+        case MachineType::RRTTT: {
+            // rt = I: the head turns the tool by Rx(A)·Ry(B) about the spindle pivot.
+            const Vec3 arm = rot_x(c1, s1, rot_y(c2, s2, g.tool_ball_mm));
+            f.position = lin + arm;
+            f.direction = rot_x(c1, s1, Vec3(s2, 0, c2));
+            const Vec3 kb(0, c1, s1);  // Rx e_y
+            f.cw[0] = Vec3::UnitX().cross(arm);
+            f.cq[0] = Vec3::UnitX().cross(f.direction);
+            f.cw[1] = kb.cross(arm);
+            f.cq[1] = kb.cross(f.direction);
             break;
-        case MachineType::RTTTR:
-            f.rt = rx;
-            f.t = g.a_pivot_mm;
-            f.dir = r2.col(2);
-            f.ball += r2 * g.tool_ball_mm;
-            lines[0] = {Vec3::UnitX(), g.a_pivot_mm, -1};
-            lines[1] = {Vec3::UnitY(), u.linear_mm(), 1};
+        }
+        case MachineType::RTTTR: {
+            // rt = Rx(A), t = a_pivot; the head turns the tool by Ry(B).
+            const Vec3 arm = rot_y(c2, s2, g.tool_ball_mm);
+            f.position = rot_x_t(c1, s1, lin + arm - g.a_pivot_mm);
+            f.direction = rot_x_t(c1, s1, Vec3(s2, 0, c2));
+            const Vec3 kb(0, c1, -s1);  // Rxᵀ e_y
+            // −e_x × v = (0, v.z, −v.y).
+            f.cw[0] = Vec3(0, f.position.z(), -f.position.y());
+            f.cq[0] = Vec3(0, f.direction.z(), -f.direction.y());
+            f.cw[1] = kb.cross(rot_x_t(c1, s1, arm));
+            f.cq[1] = kb.cross(f.direction);
             break;
-    }
-    for (int j = 0; j < 2; ++j) {
-        f.cw[j] = lines[j].sign * (f.rt.transpose() * lines[j].k.cross(f.ball - lines[j].p));
-        f.cq[j] = lines[j].sign * (f.rt.transpose() * lines[j].k.cross(f.dir));
+        }
     }
     return f;
+}
+
+Vec3 Compensator::Frame::to_machine(const Vec3& v) const {
+    switch (type) {
+        case MachineType::TTTRR:
+            return rot_x(tr.c1, tr.s1, rot_z(tr.c2, tr.s2, v));
+        case MachineType::RTTTR:
+            return rot_x(tr.c1, tr.s1, v);
+        case MachineType::RRTTT:
+            break;
+    }
+    return v;
 }
 
 std::array<double, 5> Compensator::step(const Frame& f, const Vec3& dw, const Vec3& dq, int& suppressed) const {
@@ -184,9 +232,10 @@ std::array<double, 5> Compensator::step(const Frame& f, const Vec3& dw, const Ve
     const Vec3* cw = f.cw;
     if (suppressed < 0) {
         // |cq| = |sin| of the angle between the axis and the tool axis.
-        if (cq[1].norm() < options_.singular_tolerance)
+        const double tol2 = options_.singular_tolerance * options_.singular_tolerance;
+        if (cq[1].squaredNorm() < tol2)
             suppressed = 4;
-        else if (cq[0].norm() < options_.singular_tolerance)
+        else if (cq[0].squaredNorm() < tol2)
             suppressed = 3;
     }
     double d1 = 0, d2 = 0;
@@ -197,22 +246,28 @@ std::array<double, 5> Compensator::step(const Frame& f, const Vec3& dw, const Ve
     } else {  // least squares over the three direction components
         const double n11 = cq[0].squaredNorm(), n12 = cq[0].dot(cq[1]), n22 = cq[1].squaredNorm();
         const double b1 = cq[0].dot(dq), b2 = cq[1].dot(dq);
-        const double det = n11 * n22 - n12 * n12;
-        d1 = (n22 * b1 - n12 * b2) / det;
-        d2 = (n11 * b2 - n12 * b1) / det;
+        const double inv_det = 1.0 / (n11 * n22 - n12 * n12);
+        d1 = (n22 * b1 - n12 * b2) * inv_det;
+        d2 = (n11 * b2 - n12 * b1) * inv_det;
     }
-    const Vec3 dp = f.rt * (dw - cw[0] * d1 - cw[1] * d2);
+    const Vec3 dp = f.to_machine(dw - cw[0] * d1 - cw[1] * d2);
     return {dp.x(), dp.y(), dp.z(), d1, d2};
 }
 
-Correction Compensator::first_order(const Pose& u) const {
+// The hot path of `ballbar compensate` (≥ 10 M poses/s): everything it calls, Eigen's fixed-size
+// kernels included, is inlined into it (GCC and Clang; GCC 12 at -O2 otherwise leaves calls per
+// 3-vector assignment).
+#if defined(__GNUC__)
+__attribute__((flatten))
+#endif
+Correction
+Compensator::first_order(const Pose& u) const {
     const MachineModel::Trig tr = MachineModel::trig(nominal_.geometry().type, u);
     const Frame f = frame(u, tr);
-    const ToolPose want = f.tool_pose();
     const ToolPose got = actual_.tool_pose(u, tr);
     Correction c;
     int suppressed = -1;
-    c.du = step(f, want.position_mm - got.position_mm, want.direction - got.direction, suppressed);
+    c.du = step(f, f.position - got.position_mm, f.direction - got.direction, suppressed);
     c.singular = suppressed >= 0;
     c.suppressed_axis = suppressed;
     c.commanded = add_correction(nominal_.geometry().type, u, c.du);

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/analysis/nc_program.hpp"
 
-#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -9,9 +8,17 @@
 namespace ballbar::analysis {
 namespace {
 
+// NC text is ASCII: these are the "C" locale's classes without a library call per character.
+constexpr bool is_space(char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
+}
+constexpr char to_upper(char c) {
+    return c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;
+}
+
 std::string_view trim(std::string_view s) {
-    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+    while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
+    while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
     return s;
 }
 
@@ -43,17 +50,35 @@ std::string strip_comments(std::string& code, int line, NcDialect dialect) {
 double parse_number(std::string_view text, std::size_t& pos, int line, char letter) {
     const std::size_t start = pos;
     if (pos < text.size() && (text[pos] == '+' || text[pos] == '-')) ++pos;
-    while (pos < text.size() && (std::isdigit(static_cast<unsigned char>(text[pos])) || text[pos] == '.')) ++pos;
-    std::string_view num = text.substr(start, pos - start);
+    while (pos < text.size() && ((text[pos] >= '0' && text[pos] <= '9') || text[pos] == '.')) ++pos;
+    const std::string_view num = text.substr(start, pos - start);
     if (num.empty() || num == "+" || num == "-" || num == ".")
         throw NcError(line, std::string("word ") + letter + " has no number");
-    // from_chars rejects a leading '+' and a bare leading '.', both legal in NC programs.
-    std::string buf(num);
-    if (buf.front() == '+') buf.erase(0, 1);
-    if (buf.front() == '.' || (buf.size() > 1 && buf[0] == '-' && buf[1] == '.')) buf.insert(buf.front() == '-', "0");
+    // from_chars rejects a leading '+' and a bare leading '.', both legal in NC programs: those
+    // (rare) spellings are rewritten in a small buffer first.
+    const char* first = num.data();
+    const char* last = num.data() + num.size();
+    char buf[72];
+    const bool plain = (num[0] >= '0' && num[0] <= '9') || (num[0] == '-' && num.size() > 1 && num[1] != '.');
+    if (!plain) {
+        std::string_view digits = num;
+        bool negative = false;
+        if (digits.front() == '+' || digits.front() == '-') {
+            negative = digits.front() == '-';
+            digits.remove_prefix(1);
+        }
+        if (digits.size() + 2 > sizeof buf)
+            throw NcError(line, std::string("word ") + letter + " has a malformed number '" + std::string(num) + "'");
+        std::size_t k = 0;
+        if (negative) buf[k++] = '-';
+        if (digits.front() == '.') buf[k++] = '0';
+        digits.copy(buf + k, digits.size());
+        first = buf;
+        last = buf + k + digits.size();
+    }
     double value = 0;
-    const auto res = std::from_chars(buf.data(), buf.data() + buf.size(), value);
-    if (res.ec != std::errc() || res.ptr != buf.data() + buf.size())
+    const auto res = std::from_chars(first, last, value);
+    if (res.ec != std::errc() || res.ptr != last)
         throw NcError(line, std::string("word ") + letter + " has a malformed number '" + std::string(num) + "'");
     return value;
 }
@@ -77,10 +102,15 @@ NcMotion motion_for_g(double g, int line) {
     throw NcError(line, std::string("unsupported G code G") + num + " (ballbar runs G0, G1, G4 in G90/G21)");
 }
 
-void append_number(std::string& out, char letter, double value) {
-    char buf[48];
-    std::snprintf(buf, sizeof buf, " %c%.4f", letter, value);
-    out += buf;
+/// Appends " <letter><value>" with `decimals` digits after the point (printf's %.Nf, without its locale
+/// and format-string cost: this runs for every axis word of a million-block program).
+void append_number(std::string& out, char letter, double value, int decimals = 4) {
+    char buf[352];  // the longest finite double in fixed notation fits
+    buf[0] = ' ';
+    buf[1] = letter;
+    const auto res = std::to_chars(buf + 2, buf + sizeof buf, value, std::chars_format::fixed, decimals);
+    if (res.ec != std::errc()) throw AnalysisError("NC program: axis value out of range");
+    out.append(buf, res.ptr);
 }
 
 }  // namespace
@@ -98,12 +128,14 @@ std::optional<NcDialect> parse_nc_dialect(std::string_view text) {
     return std::nullopt;
 }
 
-NcProgram parse_nc_program(std::string_view text, NcDialect dialect) {
-    NcProgram program;
-    program.dialect = dialect;
-    NcMotion modal = NcMotion::None;
-    int line_no = 0;
-    std::size_t pos = 0;
+NcReader::NcReader(std::string_view text, NcDialect dialect) : text_(text), dialect_(dialect) {}
+
+bool NcReader::next(NcBlock& block) {
+    const std::string_view text = text_;
+    const NcDialect dialect = dialect_;
+    NcMotion& modal = modal_;
+    int& line_no = line_;
+    std::size_t& pos = pos_;
     while (pos <= text.size()) {
         std::size_t end = text.find('\n', pos);
         if (end == std::string_view::npos) end = text.size();
@@ -113,12 +145,30 @@ NcProgram parse_nc_program(std::string_view text, NcDialect dialect) {
         if (!raw.empty() && raw.back() == '\r') raw.remove_suffix(1);
         if (end == text.size() && raw.empty()) break;
 
-        NcBlock block;
+        // The caller's block is reused: its strings keep their capacity.
         block.line = line_no;
-        block.raw = std::string(raw);
-        std::string code(raw);
-        block.comment = strip_comments(code, line_no, dialect);
-        std::string_view body = trim(code);
+        block.motion = NcMotion::None;
+        block.X_mm.reset();
+        block.Y_mm.reset();
+        block.Z_mm.reset();
+        block.A_rad.reset();
+        block.B_rad.reset();
+        block.C_rad.reset();
+        block.feed_mm_min.reset();
+        block.dwell_s = 0;
+        block.comment.clear();
+        block.extra_words.clear();
+        block.raw.clear();
+        // Most lines have no comment: parse them in place, without copying the line.
+        std::string code;
+        std::string_view body = raw;
+        if (raw.find('(') != std::string_view::npos ||
+            (dialect == NcDialect::LinuxCNC && raw.find(';') != std::string_view::npos)) {
+            code = std::string(raw);
+            block.comment = strip_comments(code, line_no, dialect);
+            body = code;
+        }
+        body = trim(body);
         if (body == "%") continue;  // Fanuc tape framing
         if (!body.empty() && (body.front() == 'O' || body.front() == 'o') && dialect == NcDialect::Fanuc) {
             continue;  // program number
@@ -129,13 +179,12 @@ NcProgram parse_nc_program(std::string_view text, NcDialect dialect) {
         bool has_g_motion = false;
         std::size_t i = 0;
         while (i < body.size()) {
-            const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(body[i])));
-            if (std::isspace(static_cast<unsigned char>(c))) {
+            const char c = to_upper(body[i]);
+            if (is_space(c)) {
                 ++i;
                 continue;
             }
-            if (!std::isalpha(static_cast<unsigned char>(c)))
-                throw NcError(line_no, std::string("unexpected character '") + body[i] + "'");
+            if (c < 'A' || c > 'Z') throw NcError(line_no, std::string("unexpected character '") + body[i] + "'");
             ++i;
             while (i < body.size() && body[i] == ' ') ++i;
             const double v = parse_number(body, i, line_no, c);
@@ -211,80 +260,111 @@ NcProgram parse_nc_program(std::string_view text, NcDialect dialect) {
             if (modal == NcMotion::None) throw NcError(line_no, "axis words before any G0/G1");
             block.motion = modal;
         }
-        if (block.motion == NcMotion::None && block.comment.empty() && trim(code).empty()) continue;
-        program.blocks.push_back(std::move(block));
+        if (block.motion == NcMotion::None) {
+            if (block.comment.empty() && body.empty()) continue;
+            block.raw = raw;  // words ballbar does not interpret are kept on rewrite
+        }
+        return true;
     }
+    pos = text.size() + 1;
+    return false;
+}
+
+NcProgram parse_nc_program(std::string_view text, NcDialect dialect) {
+    NcProgram program;
+    program.dialect = dialect;
+    NcReader reader(text, dialect);
+    NcBlock block;
+    while (reader.next(block)) program.blocks.push_back(block);
     return program;
 }
 
-std::string write_nc_program(const NcProgram& program, std::string_view title) {
-    std::string out;
-    const bool fanuc = program.dialect == NcDialect::Fanuc;
+void write_nc_header(std::string& out, NcDialect dialect, std::string_view title) {
+    const bool fanuc = dialect == NcDialect::Fanuc;
     if (fanuc) {
         out += "%\nO0001";
-        if (!title.empty()) out += " (" + std::string(title) + ")";
+        if (!title.empty()) out.append(" (").append(title).append(")");
         out += '\n';
     } else if (!title.empty()) {
-        out += "(" + std::string(title) + ")\n";
+        out.append("(").append(title).append(")\n");
     }
     out += "G90 G21\n";
-    for (const auto& b : program.blocks) {
-        std::string line;
+}
+
+void write_nc_block(std::string& out, const NcBlock& b, NcDialect dialect) {
+    const bool fanuc = dialect == NcDialect::Fanuc;
+    {
         if (b.motion == NcMotion::None && !b.raw.empty()) {
             // A block ballbar does not interpret (M3 S1000, T1 M6, ...): kept verbatim, except the
             // framing this writer adds itself.
             std::string code = b.raw;
-            strip_comments(code, b.line, program.dialect);
+            strip_comments(code, b.line, dialect);
             const std::string_view body = trim(code);
             if (!body.empty()) {
                 if (!is_framing(body)) {
                     out += trim(b.raw);
                     out += '\n';
                 }
-                continue;
+                return;
             }
         }
+        // The line is built in place at the end of `out`; nothing is appended for an empty block.
+        const std::size_t start = out.size();
         switch (b.motion) {
             case NcMotion::Rapid:
-                line = "G0";
+                out += "G0";
                 break;
             case NcMotion::Feed:
-                line = "G1";
+                out += "G1";
                 break;
-            case NcMotion::Dwell: {
-                char buf[48];
+            case NcMotion::Dwell:
+                out += "G4";
                 if (fanuc)
-                    std::snprintf(buf, sizeof buf, "G4 P%.0f", std::round(b.dwell_s * 1000.0));
+                    append_number(out, 'P', std::round(b.dwell_s * 1000.0), 0);
                 else
-                    std::snprintf(buf, sizeof buf, "G4 P%.3f", b.dwell_s);
-                line = buf;
+                    append_number(out, 'P', b.dwell_s, 3);
                 break;
-            }
             case NcMotion::None:
                 break;
         }
-        if (b.X_mm) append_number(line, 'X', *b.X_mm);
-        if (b.Y_mm) append_number(line, 'Y', *b.Y_mm);
-        if (b.Z_mm) append_number(line, 'Z', *b.Z_mm);
-        if (b.A_rad) append_number(line, 'A', rad_to_deg(*b.A_rad));
-        if (b.B_rad) append_number(line, 'B', rad_to_deg(*b.B_rad));
-        if (b.C_rad) append_number(line, 'C', rad_to_deg(*b.C_rad));
-        if (!b.extra_words.empty()) line += ' ' + b.extra_words;
-        if (b.feed_mm_min && b.motion == NcMotion::Feed) {
-            char buf[32];
-            std::snprintf(buf, sizeof buf, " F%.1f", *b.feed_mm_min);
-            line += buf;
-        }
+        if (b.X_mm) append_number(out, 'X', *b.X_mm);
+        if (b.Y_mm) append_number(out, 'Y', *b.Y_mm);
+        if (b.Z_mm) append_number(out, 'Z', *b.Z_mm);
+        if (b.A_rad) append_number(out, 'A', rad_to_deg(*b.A_rad));
+        if (b.B_rad) append_number(out, 'B', rad_to_deg(*b.B_rad));
+        if (b.C_rad) append_number(out, 'C', rad_to_deg(*b.C_rad));
+        if (!b.extra_words.empty()) out.append(" ").append(b.extra_words);
+        if (b.feed_mm_min && b.motion == NcMotion::Feed) append_number(out, 'F', *b.feed_mm_min, 1);
         if (!b.comment.empty()) {
-            if (!line.empty()) line += ' ';
-            line += "(" + b.comment + ")";
+            if (out.size() > start) out += ' ';
+            out.append("(").append(b.comment).append(")");
         }
-        if (line.empty()) continue;
-        out += line;
-        out += '\n';
+        if (out.size() > start) out += '\n';
     }
-    out += fanuc ? "M30\n%\n" : "M2\n";
+}
+
+void write_nc_footer(std::string& out, NcDialect dialect) {
+    out += dialect == NcDialect::Fanuc ? "M30\n%\n" : "M2\n";
+}
+
+std::string write_nc_program(const NcProgram& program, std::string_view title) {
+    std::string out;
+    out.reserve(64 * program.blocks.size() + 64);
+    write_nc_header(out, program.dialect, title);
+    for (const auto& b : program.blocks) write_nc_block(out, b, program.dialect);
+    write_nc_footer(out, program.dialect);
     return out;
+}
+
+Pose pose_after(const NcBlock& b, const Pose& before) {
+    Pose p = before;
+    if (b.X_mm) p.X_mm = *b.X_mm;
+    if (b.Y_mm) p.Y_mm = *b.Y_mm;
+    if (b.Z_mm) p.Z_mm = *b.Z_mm;
+    if (b.A_rad) p.A_rad = *b.A_rad;
+    if (b.B_rad) p.B_rad = *b.B_rad;
+    if (b.C_rad) p.C_rad = *b.C_rad;
+    return p;
 }
 
 std::vector<Pose> resolve_poses(const NcProgram& program, const Pose& start) {
@@ -292,12 +372,7 @@ std::vector<Pose> resolve_poses(const NcProgram& program, const Pose& start) {
     poses.reserve(program.blocks.size());
     Pose p = start;
     for (const auto& b : program.blocks) {
-        if (b.X_mm) p.X_mm = *b.X_mm;
-        if (b.Y_mm) p.Y_mm = *b.Y_mm;
-        if (b.Z_mm) p.Z_mm = *b.Z_mm;
-        if (b.A_rad) p.A_rad = *b.A_rad;
-        if (b.B_rad) p.B_rad = *b.B_rad;
-        if (b.C_rad) p.C_rad = *b.C_rad;
+        p = pose_after(b, p);
         poses.push_back(p);
     }
     return poses;

@@ -105,3 +105,64 @@ TEST(NcProgram, RefusesWhatItCannotRunWithTheLine) {
         }
     }
 }
+
+TEST(NcProgram, ReaderStreamsTheSameBlocksAndResetsTheReusedOne) {
+    const std::string text =
+        "%\nO0001\nG90 G21\nG0 X1 Y2 (first) M8\nG1 Z3 F200\nX4\nT1 M6\nG4 P250\nG1 A10 C-20\nM30\n%\n";
+    const auto whole = ba::parse_nc_program(text, ba::NcDialect::Fanuc);
+    ba::NcReader reader(text, ba::NcDialect::Fanuc);
+    ba::NcBlock b;
+    ba::Pose pose;
+    const auto poses = ba::resolve_poses(whole);
+    std::size_t i = 0;
+    while (reader.next(b)) {
+        ASSERT_LT(i, whole.blocks.size());
+        const ba::NcBlock& w = whole.blocks[i];
+        EXPECT_EQ(b.line, w.line);
+        EXPECT_EQ(b.motion, w.motion) << "line " << b.line;
+        EXPECT_EQ(b.X_mm, w.X_mm) << "line " << b.line;
+        EXPECT_EQ(b.Z_mm, w.Z_mm) << "line " << b.line;
+        EXPECT_EQ(b.C_rad, w.C_rad) << "line " << b.line;
+        EXPECT_EQ(b.feed_mm_min, w.feed_mm_min) << "line " << b.line;
+        EXPECT_EQ(b.comment, w.comment) << "line " << b.line;
+        EXPECT_EQ(b.extra_words, w.extra_words) << "line " << b.line;
+        EXPECT_EQ(b.raw, w.raw) << "line " << b.line;
+        pose = ba::pose_after(b, pose);
+        EXPECT_EQ(pose.X_mm, poses[i].X_mm);
+        EXPECT_EQ(pose.Z_mm, poses[i].Z_mm);
+        ++i;
+    }
+    EXPECT_EQ(i, whole.blocks.size());
+    EXPECT_FALSE(reader.next(b)) << "stays at the end";
+    // The block after "G0 X1 Y2 (first) M8" kept none of its comment, words or axes.
+    EXPECT_TRUE(whole.blocks[2].comment.empty());
+    EXPECT_TRUE(whole.blocks[2].extra_words.empty());
+    EXPECT_FALSE(whole.blocks[2].X_mm.has_value());
+    // Only blocks without motion keep their source line.
+    EXPECT_EQ(whole.blocks[0].raw, "G90 G21");
+    EXPECT_TRUE(whole.blocks[1].raw.empty());
+}
+
+TEST(NcProgram, ReadsEverySpellingOfANumber) {
+    const auto p = ba::parse_nc_program("G0 X+1.5 Y.25 Z-.75 A-0 C+.5\nG0 X7. Y-3\n", ba::NcDialect::Fanuc);
+    ASSERT_EQ(p.blocks.size(), 2u);
+    EXPECT_DOUBLE_EQ(*p.blocks[0].X_mm, 1.5);
+    EXPECT_DOUBLE_EQ(*p.blocks[0].Y_mm, 0.25);
+    EXPECT_DOUBLE_EQ(*p.blocks[0].Z_mm, -0.75);
+    EXPECT_DOUBLE_EQ(*p.blocks[0].C_rad, ba::deg_to_rad(0.5));
+    EXPECT_DOUBLE_EQ(*p.blocks[1].X_mm, 7);
+    EXPECT_DOUBLE_EQ(*p.blocks[1].Y_mm, -3);
+}
+
+TEST(NcProgram, WritesFixedDecimalsLikePrintf) {
+    ba::NcProgram p;
+    ba::NcBlock b;
+    b.motion = ba::NcMotion::Feed;
+    b.X_mm = 1.23456;
+    b.Y_mm = -0.00004;  // rounds to zero and keeps its sign, as printf's %.4f does
+    b.Z_mm = 123456.5;
+    b.feed_mm_min = 1500.04;
+    p.blocks = {b};
+    const std::string out = ba::write_nc_program(p);
+    EXPECT_NE(out.find("G1 X1.2346 Y-0.0000 Z123456.5000 F1500.0\n"), std::string::npos) << out;
+}

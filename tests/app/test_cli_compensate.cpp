@@ -186,6 +186,23 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
                                   (d.path / "in.nc").string() + "' --out '" + (d.path / "out3.nc").string() + "'");
     EXPECT_EQ(bad.code, 2);
     EXPECT_NE(bad.err.find("X9Q"), std::string::npos) << bad.err;
+
+    // A program with an error deep inside: refused with its line, and nothing half-written; an
+    // existing output file is left as it was.
+    {
+        std::ofstream broken(d.path / "broken.nc");
+        broken << "%\nO0001\nG90\n";
+        for (int i = 0; i < 50000; ++i) broken << "G1 X" << i % 100 << " Y1 A30 C" << i % 360 << " F1000\n";
+        broken << "G2 X1 Y1 I1\n%\n";
+    }
+    std::ofstream(d.path / "keep.nc") << "precious\n";
+    const CliRun broken =
+        run(d, "compensate --model '" + (d.path / "model.json").string() + "' --program '" +
+                   (d.path / "broken.nc").string() + "' --out '" + (d.path / "keep.nc").string() + "'");
+    EXPECT_EQ(broken.code, 2);
+    EXPECT_NE(broken.err.find("line 50004"), std::string::npos) << broken.err;
+    EXPECT_EQ(slurp(d.path / "keep.nc"), "precious\n");
+    EXPECT_FALSE(fs::exists(d.path / "keep.nc.part"));
 }
 
 TEST(CliIdentify, RefusesUnknownInputs) {

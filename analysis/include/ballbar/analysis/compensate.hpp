@@ -57,6 +57,8 @@ class MachineModel {
     ErrorParams e_;
     Axis first_, second_;  // the type's rotary axes, in the order of rotary_axes(type)
     Vec3 tool_mm_ = Vec3::Zero();
+    Vec3 chain_ = Vec3::Zero();  // TTTRR: qc − qa
+    Vec3 base_ = Vec3::Zero();   // TTTRR: a_pivot + c_offset − qc; RTTTR: a_pivot − qa
 };
 
 struct CompensationOptions {
@@ -93,13 +95,15 @@ class Compensator {
     const CompensationOptions& options() const { return options_; }
 
   private:
-    // The nominal machine at u: table rotation and origin, tool ball and axis (machine frame), and the
-    // Jacobian columns of the two rotary axes (position cw, direction cq; table frame).
+    // The nominal machine at u, in the table frame: the intended tool pose and the Jacobian columns
+    // of the two rotary axes (position cw, direction cq); `to_machine` maps a table-frame vector to
+    // the machine frame (the table rotation rt).
     struct Frame {
-        Mat3 rt;
-        Vec3 t, ball, dir;
+        MachineType type = MachineType::TTTRR;
+        MachineModel::Trig tr;
+        Vec3 position, direction;
         Vec3 cw[2], cq[2];
-        ToolPose tool_pose() const { return {rt.transpose() * (ball - t), rt.transpose() * dir}; }
+        Vec3 to_machine(const Vec3& v) const;
     };
     Frame frame(const Pose& u, const MachineModel::Trig& t) const;
     // One linearised step: du from the pose error (intended − actual); `suppressed` chosen once, then kept.

@@ -5,6 +5,7 @@
 // (G4 P<seconds>, "; comment" / "(comment)", M2 end). Parsing is pure text in, blocks out.
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -30,7 +31,7 @@ struct NcBlock {
     double dwell_s = 0;       ///< G4 only
     std::string comment;      ///< text of a comment on the line, without delimiters
     std::string extra_words;  ///< machine-function words on the line (M8, S1000, T1), re-emitted on rewrite
-    std::string raw;          ///< the source line, for words ballbar does not interpret (kept on rewrite)
+    std::string raw;          ///< the source line of a block without motion (M3 S1000, T1 M6): kept on rewrite
 };
 
 struct NcProgram {
@@ -48,12 +49,37 @@ class NcError : public AnalysisError {
     int line_;
 };
 
+/// Reads a program block by block without holding all of it (a million-block program streams through
+/// `ballbar compensate` this way). `text` must outlive the reader.
+class NcReader {
+  public:
+    NcReader(std::string_view text, NcDialect dialect);
+    /// Fills `block` with the next block (every field is reset; its strings keep their capacity);
+    /// false at the end of the text. Throws NcError.
+    bool next(NcBlock& block);
+
+  private:
+    std::string_view text_;
+    NcDialect dialect_;
+    std::size_t pos_ = 0;
+    int line_ = 0;
+    NcMotion modal_ = NcMotion::None;  // G0/G1 stay in force for blocks with axis words only
+};
+
 /// Parses a program; the dialect decides how G4 P is read. Throws NcError.
 NcProgram parse_nc_program(std::string_view text, NcDialect dialect);
 
 /// Writes a program in its dialect; `parse_nc_program(write_nc_program(p), p.dialect)` gives p's
 /// motion back (axis values to 1e-4 mm / 1e-4 degree).
 std::string write_nc_program(const NcProgram& program, std::string_view title = {});
+
+/// The writer in parts, for streaming: the framing and set-up lines, one block, the program end.
+void write_nc_header(std::string& out, NcDialect dialect, std::string_view title = {});
+void write_nc_block(std::string& out, const NcBlock& block, NcDialect dialect);
+void write_nc_footer(std::string& out, NcDialect dialect);
+
+/// The absolute commanded pose after `block` (the axes it does not name keep their `before` values).
+Pose pose_after(const NcBlock& block, const Pose& before);
 
 /// The absolute commanded pose after each block (modal axes carried forward from `start`).
 std::vector<Pose> resolve_poses(const NcProgram& program, const Pose& start = {});
