@@ -4,17 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
-#include <unsupported/Eigen/AutoDiff>
 
 #include "ballbar/analysis/kinematics.hpp"
+#include "ballbar/analysis/reading_model.hpp"
 
 namespace ballbar::analysis {
 namespace {
-
-// Derivatives of one reading: every free parameter plus the 3 offsets of that reading's socket.
-constexpr int kMaxDer = static_cast<int>(kParamCount) + 3;
-using Der = Eigen::Matrix<double, kMaxDer, 1>;
-using AD = Eigen::AutoDiffScalar<Der>;
 
 constexpr double kSocketMatchMm = 1e-6;
 
@@ -110,13 +105,13 @@ Eigen::VectorXd reading_residuals(const ReadingSet& readings, const ErrorParams&
     if (!socket_offsets_mm.empty() && socket_offsets_mm.size() != sockets.size())
         throw AnalysisError("socket offsets: " + std::to_string(socket_offsets_mm.size()) + " given, readings use " +
                             std::to_string(sockets.size()) + " socket positions");
+    const ReadingModel model(readings.machine, e);
     Eigen::VectorXd r(static_cast<Eigen::Index>(readings.readings.size()));
     for (std::size_t i = 0; i < readings.readings.size(); ++i) {
         const Reading& rd = readings.readings[i];
         Vec3 socket = rd.socket_mm;
         if (!socket_offsets_mm.empty()) socket += socket_offsets_mm[static_cast<std::size_t>(which[i])];
-        r[static_cast<Eigen::Index>(i)] =
-            rd.measured_mm - predicted_reading(readings.machine, e, rd.pose, socket, conditions_of(rd));
+        r[static_cast<Eigen::Index>(i)] = rd.measured_mm - model.predict(rd.pose, socket, conditions_of(rd));
     }
     return r;
 }
@@ -128,33 +123,25 @@ Eigen::MatrixXd reading_jacobian(const ReadingSet& readings, const ErrorParams& 
     if (!socket_offsets_mm.empty() && socket_offsets_mm.size() != sockets.size())
         throw AnalysisError("socket offsets do not match the readings' socket positions");
     const int np = static_cast<int>(free.size());
-    const int nd = np + 3;
-    if (nd > kMaxDer) throw AnalysisError("too many free parameters");
+    if (free.size() > kParamCount) throw AnalysisError("too many free parameters");
     const auto ns = static_cast<Eigen::Index>(with_socket_offsets ? 3 * sockets.size() : 0);
 
-    // The parameters as AutoDiff scalars, built once: constants for fixed ones, unit seeds for free.
-    ErrorParamsT<AD> ead;
-    for (std::size_t k = 0; k < kParamCount; ++k) ead.values[k] = AD(e.values[k], Der::Zero());
-    for (int j = 0; j < np; ++j) ead[free[static_cast<std::size_t>(j)]].derivatives()[j] = 1.0;
-
+    // The closed-form gradient (reading_model.hpp); AutoDiff of the templated kinematics is the
+    // tests' reference for it.
+    const ReadingModel model(readings.machine, e);
+    ReadingModel::Gradient grad;
     Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(readings.readings.size()), np + ns);
     for (std::size_t i = 0; i < readings.readings.size(); ++i) {
         const Reading& rd = readings.readings[i];
         const auto k = static_cast<std::size_t>(which[i]);
         Vec3 s = rd.socket_mm;
         if (!socket_offsets_mm.empty()) s += socket_offsets_mm[k];
-        Vec3T<AD> sad;
-        for (int a = 0; a < 3; ++a) {
-            sad[a] = AD(s[a], Der::Zero());
-            sad[a].derivatives()[np + a] = 1.0;
-        }
-        const AD value = predicted_reading<AD>(readings.machine, ead, rd.pose, sad, conditions_of(rd));
+        model.predict(rd.pose, s, conditions_of(rd), &grad);
         const auto row = static_cast<Eigen::Index>(i);
-        const Der& d = value.derivatives();
-        if (d.size() == 0) continue;  // no dependence at all (cannot happen with seeded sockets)
-        for (int j = 0; j < np; ++j) jac(row, j) = d[j];
+        for (int j = 0; j < np; ++j)
+            jac(row, j) = grad.params[static_cast<std::size_t>(free[static_cast<std::size_t>(j)])];
         if (with_socket_offsets)
-            for (int a = 0; a < 3; ++a) jac(row, np + 3 * static_cast<Eigen::Index>(k) + a) = d[np + a];
+            for (int a = 0; a < 3; ++a) jac(row, np + 3 * static_cast<Eigen::Index>(k) + a) = grad.socket_mm[a];
     }
     return jac;
 }

@@ -111,7 +111,7 @@ Eigen::VectorXd reading_residuals(const ReadingSet& readings, const ErrorParams&
 /// The fit. Throws AnalysisError for invalid options or fewer readings than unknowns.
 FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& options);
 
-/// Exact Jacobian ∂predicted/∂(free params, socket offsets) at `e` (forward-mode AutoDiff), rows per
+/// Exact Jacobian ∂predicted/∂(free params, socket offsets) at `e` (closed form, reading_model.hpp), rows per
 /// reading; columns: `free` in order, then 3 per socket. Used by the fit and the planner.
 Eigen::MatrixXd reading_jacobian(const ReadingSet& readings, const ErrorParams& e, std::span<const Param> free,
                                  std::span<const Vec3> socket_offsets_mm, bool with_socket_offsets);

@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: MIT
+// The bar reading the actual kinematics predict, with its gradient with respect to every error
+// parameter and to the socket's position, in closed form.
+//
+// It is the model of kinematics.hpp's predicted_reading() (the tests hold the two to 1e-12 mm and
+// this gradient to the AutoDiff derivatives of the templated kinematics), written for speed:
+// identification and discovery evaluate it for every reading at every Jacobian, and forward-mode
+// AutoDiff with one derivative per parameter costs about thirty times as much. The derivation is in
+// docs/identification.md ("Jacobian").
+#pragma once
+
+#include <array>
+
+#include "ballbar/analysis/error_params.hpp"
+#include "ballbar/analysis/kinematics.hpp"
+#include "ballbar/analysis/types.hpp"
+
+namespace ballbar::analysis {
+
+class ReadingModel {
+  public:
+    ReadingModel(const MachineGeometry& geom, const ErrorParams& e);
+
+    struct Gradient {
+        std::array<double, kParamCount> params{};  ///< ∂reading/∂parameter (parameters absent from the type: 0)
+        Vec3 socket_mm = Vec3::Zero();             ///< ∂reading/∂(socket position)
+    };
+
+    /// The predicted reading (mm); with `grad`, also its gradient.
+    double predict(const Pose& pose, const Vec3& socket_mm, const ReadingConditions& cond,
+                   Gradient* grad = nullptr) const;
+
+  private:
+    // An actual rotary axis: x ↦ q + R(θ + zero)(x − q), R about `dir`. `dir` = Q·(nominal axis)
+    // with Q the product of its two tilt rotations; ∂Q/∂tilt = [w]×·Q.
+    struct Axis {
+        Vec3 offset = Vec3::Zero();  // the location error part of q (q = base point + offset)
+        Vec3 dir = Vec3::UnitX();
+        Mat3 outer = Mat3::Zero();  // dir·dirᵀ
+        double cos_zero = 1, sin_zero = 0;
+        Param off[2]{};   // the location errors, along unit vectors off_dir
+        Vec3 off_dir[2];  // (unit vectors)
+        Param tilt[2]{};  // the tilt errors, with their w
+        Vec3 w[2];
+        Param zero{};
+        Mat3 rotation(double angle_rad) const;
+        /// Adds g·u·∂p'/∂(this axis's parameters) to `grad`, p' = q + R(p − q), for a rotation
+        /// that took p (relative to q: `rel_in`) to p' (`rel_out` = p' − q).
+        void gradient(const Mat3& r, const Vec3& u, const Vec3& rel_in, const Vec3& rel_out, double g,
+                      std::array<double, kParamCount>& grad) const;
+    };
+
+    MachineGeometry geom_;
+    ErrorParams e_;
+    Vec3 tool_mm_ = Vec3::Zero();  // the tool ball relative to the spindle pivot, tool length applied
+    Axis a_, b_, c_;
+};
+
+}  // namespace ballbar::analysis
