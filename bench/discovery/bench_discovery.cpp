@@ -4,10 +4,13 @@
 // parts alone: the base fit and the residual analysis. Target: 100,000 readings in under 1 s.
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <random>
+#include <string_view>
 
 #include "ballbar/analysis/discovery.hpp"
 #include "ballbar/analysis/simulate_readings.hpp"
+#include "ballbar/storage/readings_file.hpp"
 
 namespace ba = ballbar::analysis;
 
@@ -54,4 +57,17 @@ BENCHMARK(BM_ResidualAnalysis)->Arg(400)->Unit(benchmark::kMillisecond)->UseReal
 
 }  // namespace
 
-BENCHMARK_MAIN();
+// `bench_discovery --write-readings FILE [REPEAT]` writes the benchmark's session as a
+// ballbar-readings/1 file instead (for run_discover_100k.sh, the whole-process measurement).
+int main(int argc, char** argv) {
+    if (argc >= 3 && std::string_view(argv[1]) == "--write-readings") {
+        const int repeat = argc >= 4 ? std::atoi(argv[3]) : 400;
+        ballbar::storage::write_readings_file(argv[2], session(repeat));
+        return 0;
+    }
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}
