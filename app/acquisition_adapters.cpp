@@ -192,9 +192,14 @@ void StoreSink::on_test(const acq::TestResult& r) {
     store_.add_result(id_, "orientation", test_json(r), std::nullopt, "ballbar acquisition/1");
 }
 
-void StoreSink::finish(acq::State final_state, const std::string& reason) {
+void StoreSink::finish(const acq::SessionSummary& summary) {
     writer_.flush();
-    switch (final_state) {
+    const std::string& reason = summary.reason;
+    if (summary.interrupted) {
+        store_.transition(id_, storage::SessionState::interrupted, "interrupted: " + reason);
+        return;
+    }
+    switch (summary.final_state) {
         case acq::State::Done:
             store_.finish_session(id_);
             break;

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "ballbar/acquisition/interfaces.hpp"
+#include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/instrument.hpp"
 #include "ballbar/storage/sample_writer.hpp"
 #include "ballbar/storage/store.hpp"
@@ -57,8 +58,9 @@ class StoreSink : public acquisition::SessionSink {
     void on_point(const acquisition::CapturedPoint& p) override;
     void on_location(const acquisition::LocationResult& r) override;
     void on_test(const acquisition::TestResult& r) override;
-    /// Commits pending samples and moves the stored session to the state matching `final_state`.
-    void finish(acquisition::State final_state, const std::string& reason);
+    /// Commits pending samples and moves the stored session to the state matching the summary's final
+    /// state; a session the operator interrupted becomes `interrupted`, so `measure --resume` takes it up.
+    void finish(const acquisition::SessionSummary& summary);
 
   private:
     storage::Store& store_;

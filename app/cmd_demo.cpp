@@ -193,7 +193,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     DemoOperator op(plan, emulator.emulator().machine(), show);
     acq::Session session(plan, source, sink, op);
     const acq::SessionSummary sum = session.run();
-    sink.finish(sum.final_state, sum.reason);
+    sink.finish(sum);
     if (sum.final_state != acq::State::Done)
         throw CliError(kExitFailure, "demo session " + std::to_string(id) + " ended " +
                                          std::string(acq::to_string(sum.final_state)) + ": " + sum.reason);

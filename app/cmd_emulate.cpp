@@ -3,7 +3,6 @@
 // standalone process, behind a pseudo-terminal (connect with serial:/dev/pts/N) or a loopback TCP port
 // (tcp:127.0.0.1:PORT). Prints where it listens on stdout (one line; a new line after each simulated
 // reconnect) and serves until SIGINT/SIGTERM.
-#include <atomic>
 #include <csignal>
 #include <iostream>
 #include <memory>
@@ -12,14 +11,9 @@
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "command.hpp"
+#include "interrupt.hpp"
 
 namespace {
-
-std::atomic<bool> g_stop{false};
-
-extern "C" void on_stop_signal(int) {
-    g_stop.store(true);
-}
 
 struct EmulateOptions {
     bool pty = false;
@@ -53,16 +47,12 @@ int run_emulate(const EmulateOptions& o) {
     }
     device::Emulator emu(cfg);
 
-    struct sigaction sa {};
-    sa.sa_handler = on_stop_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, nullptr);
-    sigaction(SIGTERM, &sa, nullptr);
+    const app::InterruptGuard interrupt;  // Ctrl-C or SIGTERM: stop serving and exit
     std::signal(SIGPIPE, SIG_IGN);
 
     device::HostOptions opt;
     opt.pacing = o.fast ? device::Pacing::Simulated : device::Pacing::RealTime;
-    opt.stop = &g_stop;
+    opt.stop = app::InterruptGuard::flag();
     if (o.verbose) opt.on_event = [](const std::string& what) { std::cerr << "ballbar emulate: " << what << '\n'; };
     device::EmulatorHost host(emu, opt);
     std::cerr << "ballbar emulate: " << cfg.instrument.model << " serial " << cfg.instrument.serial << ", "

@@ -15,6 +15,7 @@
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
+#include "interrupt.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -167,10 +168,19 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         }
     });
     StoreSink sink(store, id, plan);
-    acq::Session session(plan, source, sink, *op);
+    const InterruptGuard interrupt;  // Ctrl-C: stop, store, stay resumable, exit 3
+    acq::SessionOptions options;
+    options.stop = InterruptGuard::flag();
+    acq::Session session(plan, source, sink, *op, options);
     session.restore(done);
     const acq::SessionSummary sum = session.run();
-    sink.finish(sum.final_state, sum.reason);
+    sink.finish(sum);
+    if (sum.interrupted)
+        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " interrupted after " +
+                                             std::to_string(sum.samples) +
+                                             " samples; everything measured is stored. Continue it with: ballbar "
+                                             "measure --resume " +
+                                             std::to_string(id) + " --device " + o.device);
     if (sum.final_state == acq::State::Done) {
         print_results(std::cout, sum);
         std::cout << "Session " << id << " completed (" << sum.samples << " samples).\n";

@@ -3,7 +3,6 @@
 // reading, sample rate, lost frames and bar temperature; with --json a summary at the end.
 #include <unistd.h>
 
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -16,14 +15,9 @@
 #include "ballbar/device/instrument.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
+#include "interrupt.hpp"
 
 namespace {
-
-std::atomic<bool> g_interrupted{false};
-
-extern "C" void on_interrupt(int) {
-    g_interrupted.store(true);
-}
 
 struct MonitorOptions {
     std::string device;
@@ -58,10 +52,7 @@ int run_monitor(const MonitorOptions& o) {
     using namespace ballbar;
     using app::CliError;
     using namespace std::chrono;
-    struct sigaction sa {};
-    sa.sa_handler = on_interrupt;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, nullptr);
+    const app::InterruptGuard interrupt;  // Ctrl-C ends the monitoring with a summary and exit 3
     std::signal(SIGPIPE, SIG_IGN);
 
     std::unique_ptr<device::Instrument> inst;
@@ -92,7 +83,7 @@ int run_monitor(const MonitorOptions& o) {
         const auto start = steady_clock::now();
         auto next_show = start + milliseconds(500);
         const bool tty = ::isatty(STDOUT_FILENO);
-        while (!g_interrupted.load()) {
+        while (!app::InterruptGuard::requested()) {
             const auto now = steady_clock::now();
             if (o.seconds > 0 && now - start >= duration<double>(o.seconds)) break;
             inst->poll(milliseconds(20));
@@ -145,7 +136,7 @@ int run_monitor(const MonitorOptions& o) {
     if (!failure.empty()) {
         throw CliError(app::kExitFailure, disconnected ? "instrument disconnected: " + failure : failure);
     }
-    return g_interrupted.load() ? app::kExitInterrupted : app::kExitOk;
+    return app::InterruptGuard::requested() ? app::kExitInterrupted : app::kExitOk;
 }
 
 }  // namespace

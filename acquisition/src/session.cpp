@@ -44,6 +44,14 @@ void Session::fire(Event e, std::string detail) {
 }
 
 void Session::end(Event e, const std::string& reason) {
+    // Whatever ends the session once a stop was requested (a prompt or a read cut short by the
+    // signal) is the operator's interruption, not a failure of the instrument.
+    if (options_.stop && options_.stop->load()) {
+        summary_.interrupted = true;
+        summary_.reason = "interrupted by the operator";
+        fire(Event::Abort, summary_.reason);
+        throw Stop{};
+    }
     summary_.reason = reason;
     fire(e, reason);
     throw Stop{};
@@ -257,6 +265,7 @@ std::optional<WindowStats> Session::wait_for_window(const PlannedPoint& planned,
 }
 
 void Session::fetch() {
+    if (options_.stop && options_.stop->load()) end(Event::Abort, "interrupted by the operator");
     buffer_pos_ = buffer_n_ = 0;
     std::size_t n = 0;
     const ReadStatus st = source_.read(buffer_, n, options_.read_timeout);
@@ -299,6 +308,7 @@ void Session::pause() {
     op_.message("Instrument lost: plug it back in; the session continues at " + at + ".");
     broken_ = true;
     for (int i = 0; i < options_.max_reconnect_attempts; ++i) {
+        if (options_.stop && options_.stop->load()) end(Event::Abort, "interrupted by the operator");
         bool back = false;
         try {
             back = source_.reconnect(options_.read_timeout);

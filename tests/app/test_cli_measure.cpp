@@ -169,54 +169,93 @@ TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
               0);
 }
 
-TEST(CliMeasure, KilledSessionResumesAfterItsLastPoint) {
-    const fs::path dir = temp_dir();
-    const fs::path db = dir / "killed.db";
-    fs::remove(db);
+/// Starts `measure --non-interactive` on the emulator and reads its output until three of the six
+/// points are captured (the fourth is a second away); then sends `sig` and waits. Returns the output,
+/// the session id and the exit status.
+struct StoppedMeasure {
+    std::string out;
+    std::string session;
+    int status = 0;
+};
+
+StoppedMeasure measure_then_signal(const fs::path& dir, const fs::path& db, int sig) {
     const std::string exe = BALLBAR_EXE;
     const std::string machine = (kData / "tttrr.json").string();
     const std::string plan = (kData / "tttrr-quick.plan.json").string();
     const std::string device = "emulator:" + emulator_config(dir).string();
     const std::string prog = (dir / "k.nc").string();
-    int pipefd[2];
-    ASSERT_EQ(::pipe(pipefd), 0);
+    StoppedMeasure r;
+    int outfd[2];
+    if (::pipe(outfd) != 0) return r;
     const pid_t pid = ::fork();
-    ASSERT_GE(pid, 0);
+    if (pid < 0) return r;
     if (pid == 0) {
-        ::dup2(pipefd[1], STDOUT_FILENO);
-        ::close(pipefd[0]);
+        ::dup2(outfd[1], STDOUT_FILENO);
+        ::dup2(outfd[1], STDERR_FILENO);
+        ::close(outfd[0]);
         ::execl(exe.c_str(), exe.c_str(), "--db", db.c_str(), "measure", "--non-interactive", "--device",
                 device.c_str(), "--machine", machine.c_str(), "--plan", plan.c_str(), "--program", prog.c_str(),
                 static_cast<char*>(nullptr));
         ::_exit(127);
     }
-    ::close(pipefd[1]);
-    std::string out;
+    ::close(outfd[1]);
     std::array<char, 1024> buf{};
-    while (out.find("captured 3/6") == std::string::npos) {
-        const ssize_t n = ::read(pipefd[0], buf.data(), buf.size());
+    while (r.out.find("captured 3/6") == std::string::npos) {
+        const ssize_t n = ::read(outfd[0], buf.data(), buf.size());
         if (n <= 0) break;
-        out.append(buf.data(), static_cast<std::size_t>(n));
+        r.out.append(buf.data(), static_cast<std::size_t>(n));
     }
-    ::kill(pid, SIGKILL);  // three points stored, the fourth a second away
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    ::close(pipefd[0]);
-    ASSERT_NE(out.find("captured 3/6"), std::string::npos) << out;
+    ::kill(pid, sig);
+    for (ssize_t n; (n = ::read(outfd[0], buf.data(), buf.size())) > 0;)
+        r.out.append(buf.data(), static_cast<std::size_t>(n));
+    ::waitpid(pid, &r.status, 0);
+    ::close(outfd[0]);
     std::smatch m;
-    ASSERT_TRUE(std::regex_search(out, m, std::regex("Session ([0-9]+)"))) << out;
+    if (std::regex_search(r.out, m, std::regex("Session ([0-9]+)"))) r.session = m[1].str();
+    return r;
+}
 
-    // The machine runs the program from the fourth point; the session continues there.
+/// The machine runs the program from the fourth point; the session continues there.
+void expect_resumes_after_three_points(const fs::path& dir, const fs::path& db, const std::string& session) {
     const std::string resumed_device = "emulator:" + emulator_config(dir, 3).string();
     std::string out2;
     const int code = run("--db " + db.string() + " measure --non-interactive --device " + resumed_device +
-                             " --resume " + m[1].str() + " --program " + (dir / "k2.nc").string(),
+                             " --resume " + session + " --program " + (dir / "k2.nc").string(),
                          &out2);
     EXPECT_EQ(code, 0) << out2;
     EXPECT_NE(out2.find("resumed after 3 points"), std::string::npos) << out2;
     EXPECT_NE(out2.find("from test 1 step 2 point 1"), std::string::npos) << out2;
     EXPECT_NE(out2.find("completed"), std::string::npos) << out2;
     EXPECT_NE(out2.find("orientation (exact)"), std::string::npos) << out2;
+}
+
+TEST(CliMeasure, KilledSessionResumesAfterItsLastPoint) {
+    const fs::path dir = temp_dir();
+    const fs::path db = dir / "killed.db";
+    fs::remove(db);
+    const StoppedMeasure s = measure_then_signal(dir, db, SIGKILL);
+    ASSERT_TRUE(WIFSIGNALED(s.status)) << s.out;
+    ASSERT_NE(s.out.find("captured 3/6"), std::string::npos) << s.out;
+    ASSERT_FALSE(s.session.empty()) << s.out;
+    expect_resumes_after_three_points(dir, db, s.session);
+}
+
+TEST(CliMeasure, CtrlCStoresStopsWithExit3AndResumes) {
+    const fs::path dir = temp_dir();
+    const fs::path db = dir / "ctrlc.db";
+    fs::remove(db);
+    const StoppedMeasure s = measure_then_signal(dir, db, SIGINT);
+    ASSERT_TRUE(WIFEXITED(s.status)) << "Ctrl-C must not kill the process\n" << s.out;
+    EXPECT_EQ(WEXITSTATUS(s.status), 3) << s.out;
+    EXPECT_NE(s.out.find("interrupted after"), std::string::npos) << s.out;
+    EXPECT_NE(s.out.find("--resume " + s.session), std::string::npos) << "says how to continue:\n" << s.out;
+    ASSERT_FALSE(s.session.empty()) << s.out;
+    // Stored as interrupted by the operator, not failed or aborted: resumable.
+    std::string shown;
+    ASSERT_EQ(run("--db " + db.string() + " sessions show " + s.session + " --json", &shown), 0) << shown;
+    EXPECT_NE(shown.find("\"state\": \"interrupted\""), std::string::npos) << shown;
+    EXPECT_NE(shown.find("interrupted: interrupted by the operator"), std::string::npos) << shown;
+    expect_resumes_after_three_points(dir, db, s.session);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <optional>
 #include <span>
@@ -27,11 +28,16 @@ struct SessionOptions {
     int max_reconnect_attempts = 600;
     /// Samples between two progress reports.
     std::size_t progress_every = 100;
+    /// Set (from a SIGINT handler, say) to stop the session: it ends Aborted at the next read of the
+    /// instrument or the next thing that fails because of the signal, with `interrupted` set, so the
+    /// caller can keep it resumable. Must be lock-free (it is read, never written, here).
+    const std::atomic<bool>* stop = nullptr;
 };
 
 struct SessionSummary {
     State final_state = State::Connecting;
-    std::string reason;  ///< why it ended in Aborted/Failed
+    std::string reason;        ///< why it ended in Aborted/Failed
+    bool interrupted = false;  ///< ended because SessionOptions::stop was set (final_state Aborted)
     std::size_t samples = 0;
     std::size_t duplicates_dropped = 0;
     std::size_t gaps = 0;  ///< sequence gaps seen (samples the instrument lost)
