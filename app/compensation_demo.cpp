@@ -170,7 +170,8 @@ double safe_ratio(double a, double b) {
 
 }  // namespace
 
-int run_compensation_demo(const CompensationDemoOptions& opt, std::ostream& out, bool json) {
+int run_compensation_demo(const CompensationDemoOptions& opt, std::ostream& out, bool json,
+                          CompensationDemoResult* result) {
     const MachineGeometry g = demo_geometry();
     const ErrorParams truth = demo_truth();
     std::mt19937_64 rng(opt.seed);
@@ -207,6 +208,14 @@ int run_compensation_demo(const CompensationDemoOptions& opt, std::ostream& out,
     const AxisRms after = path_error(actual, nominal, path, run_on_emulator(g, truth, compensated));
     const Vec3 gain(safe_ratio(before.rms.x(), after.rms.x()), safe_ratio(before.rms.y(), after.rms.y()),
                     safe_ratio(before.rms.z(), after.rms.z()));
+    if (result) {
+        for (int a = 0; a < 3; ++a) {
+            result->before_um[a] = before.rms[a] * 1e3;
+            result->after_um[a] = after.rms[a] * 1e3;
+        }
+        result->path_blocks = static_cast<int>(path.size());
+        result->exact = !opt.first_order;
+    }
 
     if (json) {
         nlohmann::json j;

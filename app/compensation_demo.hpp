@@ -19,8 +19,17 @@ struct CompensationDemoOptions {
     bool first_order = false;  ///< compensate with the first-order solution instead of the exact one
 };
 
-/// Runs the demo and prints a report (text, or the JSON object of docs/compensation.md).
-/// Returns an exit code (0 ok, 1 when identification failed to converge).
-int run_compensation_demo(const CompensationDemoOptions& options, std::ostream& out, bool json);
+/// What a session's report shows of the demo: the test path's RMS error per axis (X, Y, Z), µm.
+struct CompensationDemoResult {
+    double before_um[3]{};
+    double after_um[3]{};
+    int path_blocks = 0;
+    bool exact = true;  ///< the exact (Newton) solution; false: first order
+};
+
+/// Runs the demo and prints a report (text, or the JSON object of docs/compensation.md); with
+/// `result`, also fills it. Returns an exit code (0 ok, 1 when identification failed to converge).
+int run_compensation_demo(const CompensationDemoOptions& options, std::ostream& out, bool json,
+                          CompensationDemoResult* result = nullptr);
 
 }  // namespace ballbar::app

@@ -231,6 +231,21 @@ TEST(CliDemoCompensate, ImprovesEveryAxisAtLeastFiveTimes) {
         ASSERT_TRUE(p.contains("name") && p.contains("estimate") && p.contains("true") && p.contains("std"));
     }
     EXPECT_TRUE(a["residual_um"].contains("X"));
+
+    // The before/after is stored with the demo session: its report has the compensation section,
+    // with the numbers the demo printed.
+    ASSERT_TRUE(a.contains("session")) << r.out;
+    const CliRun rep = run(d, "report " + std::to_string(a["session"].get<long>()) + " --json");
+    ASSERT_EQ(rep.code, 0) << rep.err;
+    const json j = json::parse(rep.out);
+    ASSERT_EQ(j["compensation"]["axes"].size(), 3u) << rep.out;
+    for (const auto& ax : j["compensation"]["axes"]) {
+        const std::string axis = ax["axis"];
+        EXPECT_NEAR(ax["before"].get<double>(), a["rms_before_um"][axis].get<double>(), 1e-9) << axis;
+        EXPECT_NEAR(ax["after"].get<double>(), a["residual_um"][axis].get<double>(), 1e-9) << axis;
+        EXPECT_EQ(ax["unit"], "µm");
+    }
+    EXPECT_NE(j["compensation"]["metric"].get<std::string>().find("test path"), std::string::npos);
 }
 
 }  // namespace
