@@ -51,14 +51,7 @@ double angle_between(const Vec3& a, const Vec3& b) {
 Mat3 MachineModel::Axis::rotation(double c0, double s0) const {
     const double c = c0 * cos_zero - s0 * sin_zero;  // cos(angle + zero offset)
     const double s = s0 * cos_zero + c0 * sin_zero;
-    // c·I + s·[d]× + (1 − c)·d·dᵀ, entry by entry ([d]× has a zero diagonal).
-    const double k = 1.0 - c;
-    const double sx = s * dir.x(), sy = s * dir.y(), sz = s * dir.z();
-    Mat3 r;
-    r << c + k * outer(0, 0), k * outer(0, 1) - sz, k * outer(0, 2) + sy,  //
-        k * outer(1, 0) + sz, c + k * outer(1, 1), k * outer(1, 2) - sx,   //
-        k * outer(2, 0) - sy, k * outer(2, 1) + sx, c + k * outer(2, 2);
-    return r;
+    return detail::rotation_about(dir, outer, c, s);
 }
 
 MachineModel::MachineModel(const MachineGeometry& geom, const ErrorParams& e) : geom_(geom), e_(e) {

@@ -9,13 +9,7 @@ Mat3 ReadingModel::Axis::rotation(double angle_rad) const {
     const double c0 = std::cos(angle_rad), s0 = std::sin(angle_rad);
     const double c = c0 * cos_zero - s0 * sin_zero;  // cos(angle + zero offset)
     const double s = s0 * cos_zero + c0 * sin_zero;
-    const double k = 1.0 - c;
-    const double sx = s * dir.x(), sy = s * dir.y(), sz = s * dir.z();
-    Mat3 r;
-    r << c + k * outer(0, 0), k * outer(0, 1) - sz, k * outer(0, 2) + sy,  //
-        k * outer(1, 0) + sz, c + k * outer(1, 1), k * outer(1, 2) - sx,   //
-        k * outer(2, 0) - sy, k * outer(2, 1) + sx, c + k * outer(2, 2);
-    return r;
+    return detail::rotation_about(dir, outer, c, s);
 }
 
 void ReadingModel::Axis::gradient(const Mat3& r, const Vec3& u, const Vec3& rel_in, const Vec3& rel_out, double g,
@@ -23,7 +17,7 @@ void ReadingModel::Axis::gradient(const Mat3& r, const Vec3& u, const Vec3& rel_
     // p' = q + R(p − q): ∂p'/∂q = I − R; ∂p'/∂zero = dir × (p' − q); for a tilt, ∂R/∂φ = [w]×R − R[w]×,
     // so ∂p'/∂φ = w × (p' − q) − R(w × (p − q)). Dotted with u, where u·(R v) = (Rᵀu)·v.
     const Vec3 rtu = r.transpose() * u;
-    for (int k = 0; k < 2; ++k) {
+    for (std::size_t k = 0; k < 2; ++k) {
         grad[static_cast<std::size_t>(off[k])] += g * (u.dot(off_dir[k]) - rtu.dot(off_dir[k]));
         grad[static_cast<std::size_t>(tilt[k])] += g * (u.dot(w[k].cross(rel_out)) - rtu.dot(w[k].cross(rel_in)));
     }
@@ -32,50 +26,32 @@ void ReadingModel::Axis::gradient(const Mat3& r, const Vec3& u, const Vec3& rel_
 
 ReadingModel::ReadingModel(const MachineGeometry& geom, const ErrorParams& e) : geom_(geom), e_(e) {
     tool_mm_ = geom.tool_ball_mm - Vec3(0, 0, e[Param::tool_length]);
-    auto finish = [](Axis& a, double zero) {
-        a.outer = a.dir * a.dir.transpose();
-        a.cos_zero = std::cos(zero);
-        a.sin_zero = std::sin(zero);
+    // Each axis: its location errors (along unit vectors), its tilts with their w, its zero offset.
+    auto make = [&e](Vec3 offset, Vec3 dir, std::array<Param, 2> off, std::array<Vec3, 2> off_dir,
+                     std::array<Param, 2> tilt, std::array<Vec3, 2> w, Param zero) {
+        Axis a;
+        a.offset = offset;
+        a.dir = dir;
+        a.outer = dir * dir.transpose();
+        a.off = off;
+        a.off_dir = off_dir;
+        a.tilt = tilt;
+        a.w = w;
+        a.zero = zero;
+        a.cos_zero = std::cos(e[zero]);
+        a.sin_zero = std::sin(e[zero]);
+        return a;
     };
+    const Vec3 x = Vec3::UnitX(), y = Vec3::UnitY(), z = Vec3::UnitZ();
     // A: about X, located by Y0A/Z0A, tilted by B0A (about Rz(C0A)·Y) then C0A (about Z).
-    a_.offset = Vec3(0, e[Param::Y0A], e[Param::Z0A]);
-    a_.dir = detail::a_axis_dir(e);
-    a_.off[0] = Param::Y0A;
-    a_.off[1] = Param::Z0A;
-    a_.off_dir[0] = Vec3::UnitY();
-    a_.off_dir[1] = Vec3::UnitZ();
-    a_.tilt[0] = Param::B0A;
-    a_.tilt[1] = Param::C0A;
-    a_.w[0] = rot_z(e[Param::C0A]) * Vec3::UnitY();
-    a_.w[1] = Vec3::UnitZ();
-    a_.zero = Param::A_zero;
-    finish(a_, e[Param::A_zero]);
+    a_ = make(Vec3(0, e[Param::Y0A], e[Param::Z0A]), detail::a_axis_dir(e), {Param::Y0A, Param::Z0A}, {y, z},
+              {Param::B0A, Param::C0A}, {rot_z(e[Param::C0A]) * y, z}, Param::A_zero);
     // B: about Y, located by X0B/Z0B, tilted by A0B (about Rz(C0B)·X) then C0B (about Z).
-    b_.offset = Vec3(e[Param::X0B], 0, e[Param::Z0B]);
-    b_.dir = detail::b_axis_dir(e);
-    b_.off[0] = Param::X0B;
-    b_.off[1] = Param::Z0B;
-    b_.off_dir[0] = Vec3::UnitX();
-    b_.off_dir[1] = Vec3::UnitZ();
-    b_.tilt[0] = Param::A0B;
-    b_.tilt[1] = Param::C0B;
-    b_.w[0] = rot_z(e[Param::C0B]) * Vec3::UnitX();
-    b_.w[1] = Vec3::UnitZ();
-    b_.zero = Param::B_zero;
-    finish(b_, e[Param::B_zero]);
+    b_ = make(Vec3(e[Param::X0B], 0, e[Param::Z0B]), detail::b_axis_dir(e), {Param::X0B, Param::Z0B}, {x, z},
+              {Param::A0B, Param::C0B}, {rot_z(e[Param::C0B]) * x, z}, Param::B_zero);
     // C: about Z, located by X0C/Y0C, tilted by A0C (about Ry(B0C)·X) then B0C (about Y).
-    c_.offset = Vec3(e[Param::X0C], e[Param::Y0C], 0);
-    c_.dir = detail::c_axis_dir(e);
-    c_.off[0] = Param::X0C;
-    c_.off[1] = Param::Y0C;
-    c_.off_dir[0] = Vec3::UnitX();
-    c_.off_dir[1] = Vec3::UnitY();
-    c_.tilt[0] = Param::A0C;
-    c_.tilt[1] = Param::B0C;
-    c_.w[0] = rot_y(e[Param::B0C]) * Vec3::UnitX();
-    c_.w[1] = Vec3::UnitY();
-    c_.zero = Param::C_zero;
-    finish(c_, e[Param::C_zero]);
+    c_ = make(Vec3(e[Param::X0C], e[Param::Y0C], 0), detail::c_axis_dir(e), {Param::X0C, Param::Y0C}, {x, y},
+              {Param::A0C, Param::B0C}, {rot_y(e[Param::B0C]) * x, y}, Param::C_zero);
 }
 
 double ReadingModel::predict(const Pose& pose, const Vec3& socket_mm, const ReadingConditions& cond,

@@ -12,18 +12,8 @@ dir=$(mktemp -d /tmp/ballbar-disc-bench-XXXXXX)
 trap 'rm -rf "$dir"' EXIT
 "$gen" --write-readings "$dir/readings.csv" "$repeat"
 echo "readings: $(($(grep -cv '^#' "$dir/readings.csv") - 1)) rows"
-times=""
-i=0
-while [ "$i" -lt "$runs" ]; do
-  rm -f "$dir/db.sqlite" "$dir/db.sqlite-wal" "$dir/db.sqlite-shm"
-  t0=$(date +%s.%N)
-  "$exe" --db "$dir/db.sqlite" discover "$dir/readings.csv" --json >"$dir/out.json"
-  t1=$(date +%s.%N)
-  t=$(echo "$t1 - $t0" | bc)
-  echo "run $((i + 1)): ${t} s"
-  times="$times $t"
-  i=$((i + 1))
-done
-grep -o '"effect": *"[a-z_XYZ]*"' "$dir/out.json" | head -3
-echo "$times" | tr ' ' '\n' | grep -v '^$' | sort -n | awk '{ a[NR] = $1 } END {
-  m = (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2; printf "median: %.3f s\n", m }'
+. "$(dirname "$0")/../timing.sh"
+before_run() { rm -f "$dir/db.sqlite" "$dir/db.sqlite-wal" "$dir/db.sqlite-shm" "$dir/db.sqlite.lock"; }
+TIME_RUNS_OUT="$dir/out.json" time_runs "$runs" "$repeat x 252 readings" \
+  "$exe" --db "$dir/db.sqlite" discover "$dir/readings.csv" --json
+echo "named: $(grep -o '"effect": *"[a-z_XYZ]*"' "$dir/out.json" | tr '\n' ' ')"

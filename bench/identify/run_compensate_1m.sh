@@ -24,16 +24,7 @@ awk -v n="$blocks" 'BEGIN {
   }
   print "M30"; print "%" }' >"$dir/in.nc"
 
-times=""
-i=0
-while [ "$i" -lt "$runs" ]; do
-  t0=$(date +%s.%N)
-  "$exe" compensate --model "$dir/model.json" --program "$dir/in.nc" --out "$dir/out.nc" $extra >/dev/null
-  t1=$(date +%s.%N)
-  t=$(echo "$t1 - $t0" | bc)
-  echo "run $((i + 1)): ${t} s"
-  times="$times $t"
-  i=$((i + 1))
-done
-echo "$times" | tr ' ' '\n' | grep -v '^$' | sort -n | awk '{ a[NR] = $1 } END {
-  m = (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2; printf "median: %.3f s (%d blocks)\n", m, '"$blocks"' }'
+. "$(dirname "$0")/../timing.sh"
+# shellcheck disable=SC2086 # $extra is an optional flag
+time_runs "$runs" "$blocks blocks" "$exe" compensate --model "$dir/model.json" --program "$dir/in.nc" \
+  --out "$dir/out.nc" $extra

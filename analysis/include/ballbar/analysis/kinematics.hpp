@@ -86,6 +86,18 @@ Vec3T<T> rotate_about_line(const Vec3T<T>& p, const Vec3T<T>& q, const Vec3T<T>&
     return q + v * c + d.cross(v) * s + d * (d.dot(v) * (T(1) - c));
 }
 
+/// R(d, θ) = c·I + s·[d]× + (1 − c)·d·dᵀ, entry by entry, for a unit axis d with d·dᵀ = `outer` and
+/// c, s the cosine and sine of θ (the compensation and identification hot paths build it per pose).
+inline Mat3 rotation_about(const Vec3& d, const Mat3& outer, double c, double s) {
+    const double k = 1.0 - c;
+    const double sx = s * d.x(), sy = s * d.y(), sz = s * d.z();
+    Mat3 r;
+    r << c + k * outer(0, 0), k * outer(0, 1) - sz, k * outer(0, 2) + sy,  //
+        k * outer(1, 0) + sz, c + k * outer(1, 1), k * outer(1, 2) - sx,   //
+        k * outer(2, 0) - sy, k * outer(2, 1) + sx, c + k * outer(2, 2);
+    return r;
+}
+
 template <typename T>
 Vec3T<T> vec(const Vec3& v) {
     return Vec3T<T>(T(v.x()), T(v.y()), T(v.z()));

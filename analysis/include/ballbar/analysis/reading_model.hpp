@@ -38,10 +38,10 @@ class ReadingModel {
         Vec3 dir = Vec3::UnitX();
         Mat3 outer = Mat3::Zero();  // dir·dirᵀ
         double cos_zero = 1, sin_zero = 0;
-        Param off[2]{};   // the location errors, along unit vectors off_dir
-        Vec3 off_dir[2];  // (unit vectors)
-        Param tilt[2]{};  // the tilt errors, with their w
-        Vec3 w[2];
+        std::array<Param, 2> off{};   // the location errors, along unit vectors off_dir
+        std::array<Vec3, 2> off_dir;  // (unit vectors)
+        std::array<Param, 2> tilt{};  // the tilt errors, with their w
+        std::array<Vec3, 2> w;
         Param zero{};
         Mat3 rotation(double angle_rad) const;
         /// Adds g·u·∂p'/∂(this axis's parameters) to `grad`, p' = q + R(p − q), for a rotation
