@@ -154,11 +154,11 @@ StoreSink::StoreSink(storage::Store& store, std::int64_t session_id, const acq::
     : store_(store), id_(session_id), plan_(plan), writer_(store, session_id) {}
 
 void StoreSink::on_transition(const acq::TransitionRecord& t) {
-    json j = {{"from", std::string(acq::to_string(t.from))},
-              {"to", std::string(acq::to_string(t.to))},
-              {"event", std::string(acq::to_string(t.event))},
-              {"detail", t.detail}};
-    store_.add_result(id_, "acquisition.transition", j.dump(), std::nullopt, "ballbar acquisition/1");
+    store_.add_procedure_step(id_, {std::string(acq::to_string(t.from)),
+                                    std::string(acq::to_string(t.to)),
+                                    std::string(acq::to_string(t.event)),
+                                    t.detail,
+                                    {}});
 }
 
 void StoreSink::on_samples(std::span<const analysis::BarSample> samples) {

@@ -48,7 +48,7 @@ class DeviceSource : public acquisition::SampleSource {
 };
 
 /// Stores a session as it happens: samples through a SampleWriter, points, the fine-grained audit
-/// trail and the results (kinds "acquisition.plan", "acquisition.transition", "ssm", "orientation").
+/// trail (the procedure's steps) and the results (kinds "acquisition.plan", "ssm", "orientation").
 class StoreSink : public acquisition::SessionSink {
   public:
     StoreSink(storage::Store& store, std::int64_t session_id, const acquisition::Plan& plan);

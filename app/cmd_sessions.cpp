@@ -86,6 +86,11 @@ int show_session(const SessionsOptions& o, const Globals& globals) {
         std::cout << "    " << t.at << "  " << (t.from ? std::string(storage::to_string(*t.from)) : std::string("-"))
                   << " -> " << storage::to_string(t.to) << "  (" << t.event << ")\n";
     }
+    if (const auto steps = store.procedure_steps(id); !steps.empty()) {
+        std::cout << "  procedure steps  " << steps.size() << ", the last " << steps.back().from << " -> "
+                  << steps.back().to << " (" << steps.back().event << ") at " << steps.back().at
+                  << "; all of them: sessions show " << id << " --json\n";
+    }
     const auto results = store.results(id);
     if (!results.empty()) std::cout << "  results\n";
     for (const auto& r : results) {

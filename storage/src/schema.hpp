@@ -103,6 +103,22 @@ CREATE TABLE results (
 CREATE INDEX results_by_session ON results(session_id, kind);
 )sql";
 
-inline constexpr std::array<std::string_view, 1> kMigrations = {kMigrationV1};
+// v2: the guided procedure's own steps (acquisition's state machine) join the session's lifecycle in
+// session_transitions, told apart by `scope`; v1 kept them as results of kind
+// 'acquisition.transition', which move here (in their order, with their time).
+inline constexpr std::string_view kMigrationV2 = R"sql(
+ALTER TABLE session_transitions ADD COLUMN scope TEXT NOT NULL DEFAULT 'session'
+  CHECK (scope IN ('session', 'procedure'));
+ALTER TABLE session_transitions ADD COLUMN detail TEXT NOT NULL DEFAULT '';
+CREATE INDEX session_transitions_by_scope ON session_transitions(session_id, scope, id);
+INSERT INTO session_transitions(session_id, from_state, to_state, event, at, scope, detail)
+  SELECT session_id, json_extract(payload_json, '$.from'), coalesce(json_extract(payload_json, '$.to'), ''),
+         coalesce(json_extract(payload_json, '$.event'), ''), created_at, 'procedure',
+         coalesce(json_extract(payload_json, '$.detail'), '')
+  FROM results WHERE kind = 'acquisition.transition' AND json_valid(payload_json) ORDER BY id;
+DELETE FROM results WHERE kind = 'acquisition.transition' AND json_valid(payload_json);
+)sql";
+
+inline constexpr std::array<std::string_view, 2> kMigrations = {kMigrationV1, kMigrationV2};
 
 }  // namespace ballbar::storage::detail

@@ -101,6 +101,11 @@ std::string session_json(Store& store, std::int64_t id, bool with_points, int in
                                {"at", t.at}});
     }
     doc["transitions"] = transitions;
+    ojson procedure = ojson::array();
+    for (const auto& p : store.procedure_steps(id)) {
+        procedure.push_back({{"from", p.from}, {"to", p.to}, {"event", p.event}, {"detail", p.detail}, {"at", p.at}});
+    }
+    doc["procedure"] = procedure;
     if (with_points) {
         ojson points = ojson::array();
         for (const auto& p : store.points(id)) points.push_back(point_json(p));

@@ -101,8 +101,9 @@ std::int64_t Store::find_session(std::string_view key) {
 }
 
 std::vector<Transition> Store::transitions(std::int64_t session_id) {
-    auto st =
-        db_.prepare("SELECT from_state, to_state, event, at FROM session_transitions WHERE session_id = ? ORDER BY id");
+    auto st = db_.prepare(
+        "SELECT from_state, to_state, event, at FROM session_transitions WHERE session_id = ? AND scope = "
+        "'session' ORDER BY id");
     st.bind(1, session_id);
     std::vector<Transition> out;
     while (st.step()) {
@@ -112,6 +113,32 @@ std::vector<Transition> Store::transitions(std::int64_t session_id) {
         t.event = st.column_text(2);
         t.at = st.column_text(3);
         out.push_back(std::move(t));
+    }
+    return out;
+}
+
+void Store::add_procedure_step(std::int64_t session_id, const ProcedureStep& step) {
+    auto st = db_.prepare(
+        "INSERT INTO session_transitions(session_id, from_state, to_state, event, at, scope, detail) "
+        "VALUES (?, ?, ?, ?, ?, 'procedure', ?)");
+    st.bind(1, session_id).bind(2, step.from).bind(3, step.to).bind(4, step.event);
+    st.bind(5, step.at.empty() ? now_iso8601() : step.at).bind(6, step.detail).run();
+}
+
+std::vector<ProcedureStep> Store::procedure_steps(std::int64_t session_id) {
+    auto st = db_.prepare(
+        "SELECT from_state, to_state, event, detail, at FROM session_transitions WHERE session_id = ? AND scope = "
+        "'procedure' ORDER BY id");
+    st.bind(1, session_id);
+    std::vector<ProcedureStep> out;
+    while (st.step()) {
+        ProcedureStep p;
+        if (!st.is_null(0)) p.from = st.column_text(0);
+        p.to = st.column_text(1);
+        p.event = st.column_text(2);
+        p.detail = st.column_text(3);
+        p.at = st.column_text(4);
+        out.push_back(std::move(p));
     }
     return out;
 }

@@ -90,6 +90,25 @@ TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {
     EXPECT_EQ(r.out.find("\033["), std::string::npos) << "no colour when stdout is not a terminal";
 }
 
+TEST(Demo, StoresTheProcedureStepsAsTheAuditTrail) {
+    const auto db = temp_db("audit.db");
+    const DemoRun r = run("--db " + db.string() + " demo --json");
+    ASSERT_EQ(r.status, 0) << r.out;
+    const auto id = nlohmann::json::parse(r.out)["session"].get<long>();
+    const DemoRun e = run("--db " + db.string() + " export " + std::to_string(id) + " --format json --out -");
+    ASSERT_EQ(e.status, 0) << e.out;
+    const auto j = nlohmann::json::parse(e.out);
+    // Every step of the guided procedure, in order, from connecting to the operator's acceptance ...
+    const auto& steps = j["procedure"];
+    ASSERT_GT(steps.size(), 20u) << e.out.substr(0, 2000);
+    EXPECT_EQ(steps.front()["from"], "Connecting");
+    EXPECT_EQ(steps.back()["event"], "Accepted");
+    EXPECT_EQ(steps.back()["to"], "Done");
+    // ... next to the stored session's lifecycle, and none of them among the results.
+    EXPECT_EQ(j["transitions"].back()["to"], "completed");
+    for (const auto& res : j["results"]) EXPECT_NE(res["kind"], "acquisition.transition");
+}
+
 TEST(Demo, RejectsAnUnknownMachineType) {
     const DemoRun r = run("demo --machine XYZAB");
     EXPECT_EQ(r.status, 2);

@@ -154,6 +154,16 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
         e.detail = t.event;
         r.procedure.push_back(e);
     }
+    // The guided procedure's steps, through the same reading as an "acquisition.transition" result
+    // (how schema v1 stored them, and how a report JSON carries them).
+    for (const auto& step : store.procedure_steps(session_id)) {
+        const double wall = parse_iso8601(step.at);
+        const nlohmann::json payload = {
+            {"from", step.from},   {"to", step.to},
+            {"event", step.event}, {"detail", step.detail},
+            {"at", step.at},       {"time_s", std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0}};
+        add_result(r, "acquisition.transition", payload);
+    }
     for (const auto& res : store.results(session_id)) {
         nlohmann::json payload;
         try {
@@ -161,11 +171,6 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
         } catch (const nlohmann::json::parse_error& e) {
             throw ReportError("result " + std::to_string(res.id) + " (" + res.kind +
                               "): payload is not JSON: " + e.what());
-        }
-        if (res.kind == "acquisition.transition" && payload.is_object()) {  // stored as it happened
-            payload["at"] = res.created_at;
-            const double wall = parse_iso8601(res.created_at);
-            payload["time_s"] = std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0;
         }
         if (res.kind == "identification" && payload.is_object() && !payload.contains("name") && res.model_id) {
             const storage::ModelRecord m = store.model(*res.model_id);  // the model version it produced

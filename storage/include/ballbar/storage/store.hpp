@@ -87,6 +87,16 @@ struct Transition {
     std::string at;     ///< ISO 8601 UTC
 };
 
+/// A step of the guided procedure (acquisition's state machine: "Step1Capture", "Computing", …),
+/// kept next to the session's lifecycle in the transitions table (scope "procedure").
+struct ProcedureStep {
+    std::string from;  ///< state names of the procedure, not SessionState
+    std::string to;
+    std::string event;   ///< "InPosition", "PointAccepted", "DeviceLost", …
+    std::string detail;  ///< "test 2 step 1 point 3: 99.98 mm, std 0.1 µm, n 500", …
+    std::string at;      ///< ISO 8601 UTC; the store's clock when added with it empty
+};
+
 /// One averaged reading of a session, with where it came from.
 struct PointRecord {
     std::int64_t index = -1;  ///< order within the session (assigned by add_point)
@@ -135,7 +145,7 @@ struct StoreOptions {
 
 class Store {
   public:
-    static constexpr int kSchemaVersion = 1;
+    static constexpr int kSchemaVersion = 2;
     static constexpr std::int64_t kApplicationId = 0x42424152;  // "BBAR"
 
     /// Opens or creates the database at `path` and migrates it to kSchemaVersion. Throws StorageError:
@@ -169,7 +179,12 @@ class Store {
     std::vector<SessionInfo> sessions();
     /// A session by numeric id or by a unique prefix of its uuid. Throws Kind::not_found / Kind::invalid.
     std::int64_t find_session(std::string_view id_or_uuid_prefix);
+    /// The session's lifecycle (created, running, …, completed), oldest first.
     std::vector<Transition> transitions(std::int64_t session_id);
+    /// Records a step of the guided procedure; committed at once (the audit trail of a measurement).
+    void add_procedure_step(std::int64_t session_id, const ProcedureStep& step);
+    /// The procedure's steps, oldest first.
+    std::vector<ProcedureStep> procedure_steps(std::int64_t session_id);
     void set_notes(std::int64_t session_id, std::string_view notes);
 
     // Samples (write them with SampleWriter) ----------------------------------------------------------
