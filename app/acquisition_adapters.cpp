@@ -144,6 +144,7 @@ std::string test_json(const acq::TestResult& r) {
     };
     j["first_order"] = ang(r.orientation.first_order);
     j["exact"] = ang(r.orientation.exact);
+    j["std"] = ang(r.std_rad);  // of the exact solution
     if (!r.orientation.singular.empty()) j["singular"] = r.orientation.singular;
     return j.dump();
 }

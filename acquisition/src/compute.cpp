@@ -42,16 +42,13 @@ LocationResult compute_location(const Plan& plan, int test, int step, std::span<
     return r;
 }
 
-TestResult compute_test(const Plan& plan, int test, const Vec3& dV1, const Vec3& dV2) {
+namespace {
+
+OrientationSolution solve_test(const Plan& plan, int test, const Vec3& dV1, const Vec3& dV2) {
     const MachineGeometry& g = plan.machine.geometry;
     const TestSpec& t = plan.spec.tests[static_cast<std::size_t>(test)];
     // The pivot of step 2's first point: every point of the step gives the same relation.
     const PlannedPoint& p2 = plan.points[plan.index(test, 2, 0)];
-    TestResult r;
-    r.test = test;
-    r.kind = t.kind;
-    r.dV1_mm = dV1;
-    r.dV2_mm = dV2;
     switch (g.type) {
         case MachineType::RRTTT: {
             RrtttInput in;
@@ -61,8 +58,7 @@ TestResult compute_test(const Plan& plan, int test, const Vec3& dV1, const Vec3&
             in.beta_rad = t.second_rad;
             in.dV1_mm = dV1;
             in.dV2_mm = dV2;
-            r.orientation = solve_orientation(in);
-            break;
+            return solve_orientation(in);
         }
         case MachineType::TTTRR: {
             TtttrrInput in;
@@ -73,8 +69,7 @@ TestResult compute_test(const Plan& plan, int test, const Vec3& dV1, const Vec3&
             in.gamma_rad = t.second_rad;
             in.dV1_mm = dV1;
             in.dV2_mm = dV2;
-            r.orientation = solve_orientation(in);
-            break;
+            return solve_orientation(in);
         }
         case MachineType::RTTTR:
             if (t.kind == TestKind::SpindleBeta) {
@@ -84,7 +79,7 @@ TestResult compute_test(const Plan& plan, int test, const Vec3& dV1, const Vec3&
                 in.beta_rad = t.second_rad;
                 in.dV1_mm = dV1;
                 in.dV2_mm = dV2;
-                r.orientation = solve_orientation(in);
+                return solve_orientation(in);
             } else {
                 RtttrTableInput in;
                 in.a_pivot_mm = g.a_pivot_mm;
@@ -92,10 +87,47 @@ TestResult compute_test(const Plan& plan, int test, const Vec3& dV1, const Vec3&
                 in.alpha_rad = t.first_rad;
                 in.dV1_mm = dV1;
                 in.dV2_mm = dV2;
-                r.orientation = solve_orientation(in);
+                return solve_orientation(in);
             }
-            break;
     }
+    throw AnalysisError("unknown machine type");
+}
+
+/// First-order propagation: each ΔV component moved by ± its standard uncertainty (the solution is
+/// linear over a few µm to ~1e-4), the half differences added in quadrature.
+std::optional<OrientationErrors> propagated_std(const Plan& plan, int test, const Vec3& dV1, const Vec3& dV2,
+                                                const Vec3& std1, const Vec3& std2) {
+    double var[3] = {0, 0, 0};
+    bool any = false;
+    for (int i = 0; i < 6; ++i) {
+        const double h = i < 3 ? std1[i] : std2[i - 3];
+        if (!(h > 0) || !std::isfinite(h)) continue;
+        Vec3 up1 = dV1, up2 = dV2, down1 = dV1, down2 = dV2;
+        (i < 3 ? up1[i] : up2[i - 3]) += h;
+        (i < 3 ? down1[i] : down2[i - 3]) -= h;
+        const auto up = solve_test(plan, test, up1, up2).exact;
+        const auto down = solve_test(plan, test, down1, down2).exact;
+        if (!up || !down) return std::nullopt;  // singular within one uncertainty
+        const double d[3] = {up->d_alpha_rad - down->d_alpha_rad, up->d_beta_rad - down->d_beta_rad,
+                             up->d_gamma_rad - down->d_gamma_rad};
+        for (int k = 0; k < 3; ++k) var[k] += 0.25 * d[k] * d[k];
+        any = true;
+    }
+    if (!any) return std::nullopt;
+    return OrientationErrors{std::sqrt(var[0]), std::sqrt(var[1]), std::sqrt(var[2])};
+}
+
+}  // namespace
+
+TestResult compute_test(const Plan& plan, int test, const Vec3& dV1, const Vec3& dV2, const Vec3& std1,
+                        const Vec3& std2) {
+    TestResult r;
+    r.test = test;
+    r.kind = plan.spec.tests[static_cast<std::size_t>(test)].kind;
+    r.dV1_mm = dV1;
+    r.dV2_mm = dV2;
+    r.orientation = solve_test(plan, test, dV1, dV2);
+    if (r.orientation.exact) r.std_rad = propagated_std(plan, test, dV1, dV2, std1, std2);
     return r;
 }
 

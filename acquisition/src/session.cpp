@@ -336,7 +336,7 @@ void Session::compute(int test) {
         sink_.on_location(l1);
         const LocationResult l2 = compute_location(plan_, test, 2, all.subspan(b, k));
         sink_.on_location(l2);
-        TestResult r = compute_test(plan_, test, l1.dV_mm, l2.dV_mm);
+        TestResult r = compute_test(plan_, test, l1.dV_mm, l2.dV_mm, l1.ssm.std_mm, l2.ssm.std_mm);
         sink_.on_test(r);
         summary_.tests.push_back(std::move(r));
     } catch (const AnalysisError& err) {

@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: MIT
+// The orientation errors' propagated uncertainty against a Monte Carlo of the same test: ΔV1 and ΔV2
+// drawn with the stated component uncertainties, solved exactly, the spread compared.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "ballbar/acquisition/compute.hpp"
+#include "ballbar/acquisition/machine_file.hpp"
+#include "ballbar/acquisition/plan.hpp"
+
+namespace ballbar::acquisition {
+namespace {
+
+using analysis::MachineType;
+using analysis::Vec3;
+
+class OrientationUncertainty : public ::testing::TestWithParam<MachineType> {};
+
+TEST_P(OrientationUncertainty, AgreesWithAMonteCarloOfTheSameTest) {
+    const MachineFile m = seed_machine(GetParam());
+    const Plan plan = make_plan(m, default_plan(m));
+    const auto truth = true_values(plan, demo_errors(GetParam()));
+    const Vec3 std1(0.4e-3, 0.3e-3, 0.5e-3), std2(0.5e-3, 0.4e-3, 0.3e-3);  // mm
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> n01;
+    for (int t = 0; t < plan.test_count(); ++t) {
+        const Vec3 dV1 = truth[static_cast<std::size_t>(t)].result.dV1_mm;
+        const Vec3 dV2 = truth[static_cast<std::size_t>(t)].result.dV2_mm;
+        const TestResult r = compute_test(plan, t, dV1, dV2, std1, std2);
+        ASSERT_TRUE(r.orientation.exact && r.std_rad) << "test " << t + 1;
+        EXPECT_FALSE(compute_test(plan, t, dV1, dV2).std_rad) << "no uncertainty without the inputs'";
+
+        constexpr int kDraws = 4000;
+        double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+        for (int k = 0; k < kDraws; ++k) {
+            const Vec3 n1(std1.x() * n01(rng), std1.y() * n01(rng), std1.z() * n01(rng));
+            const Vec3 n2(std2.x() * n01(rng), std2.y() * n01(rng), std2.z() * n01(rng));
+            const auto e = compute_test(plan, t, dV1 + n1, dV2 + n2).orientation.exact;
+            ASSERT_TRUE(e);
+            const double v[3] = {e->d_alpha_rad, e->d_beta_rad, e->d_gamma_rad};
+            for (int a = 0; a < 3; ++a) {
+                sum[a] += v[a];
+                sum2[a] += v[a] * v[a];
+            }
+        }
+        const double prop[3] = {r.std_rad->d_alpha_rad, r.std_rad->d_beta_rad, r.std_rad->d_gamma_rad};
+        int measured = 0;
+        for (int a = 0; a < 3; ++a) {
+            const double mean = sum[a] / kDraws;
+            const double mc = std::sqrt(std::max(sum2[a] / kDraws - mean * mean, 0.0));
+            if (prop[a] == 0) {
+                EXPECT_LT(mc, 1e-15) << "test " << t + 1 << " angle " << a << ": not measured by this test";
+                continue;
+            }
+            ++measured;
+            // 4000 draws: the sample standard deviation is within ±5 % (4σ) of the true one.
+            EXPECT_NEAR(mc, prop[a], 0.05 * prop[a]) << "test " << t + 1 << " angle " << a;
+            EXPECT_GT(prop[a], 1e-7) << "a few µm over ~100 mm is some µrad";
+        }
+        EXPECT_GE(measured, 1) << "test " << t + 1;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllTypes, OrientationUncertainty,
+                         ::testing::Values(MachineType::RRTTT, MachineType::TTTRR, MachineType::RTTTR),
+                         [](const auto& p) { return std::string(analysis::to_string(p.param)); });
+
+}  // namespace
+}  // namespace ballbar::acquisition
