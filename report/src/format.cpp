@@ -36,9 +36,9 @@ std::string degrees(const std::optional<double>& rad) {
     return fixed(analysis::rad_to_deg(*rad), kDegDecimals) + "°";
 }
 
-std::string arcseconds(const std::optional<double>& rad) {
+std::string arcseconds(const std::optional<double>& rad, int decimals) {
     if (!rad) return "–";
-    return fixed(analysis::rad_to_arcsec(*rad), kArcsecDecimals) + "″";
+    return fixed(analysis::rad_to_arcsec(*rad), decimals) + "″";
 }
 
 std::string clock_time(double seconds) {

@@ -22,7 +22,7 @@ int uncertainty_decimals(double u, int decimals);
 std::string plus_minus(double v, const std::optional<double>& u, int decimals);
 /// An angle given in radians, shown in degrees / arcseconds with the unit sign.
 std::string degrees(const std::optional<double>& rad);
-std::string arcseconds(const std::optional<double>& rad);
+std::string arcseconds(const std::optional<double>& rad, int decimals = kArcsecDecimals);
 /// A session time: "m:ss" or "h:mm:ss".
 std::string clock_time(double seconds);
 

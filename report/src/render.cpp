@@ -95,10 +95,14 @@ void results_section(Document& doc, const Report& r) {
     for (const auto& o : r.orientation) {
         const std::string from =
             o.from_location >= 0 ? "L" + std::to_string(o.from_location) + " → L" + std::to_string(o.to_location) : "–";
-        rows.push_back({o.symbol, o.axis,
-                        o.commanded_rad ? fixed(analysis::rad_to_deg(*o.commanded_rad), 3) + "°" : "–",
-                        degrees(o.first_order_rad), arcseconds(o.first_order_rad), degrees(o.exact_rad),
-                        arcseconds(o.exact_rad), arcseconds(o.uncertainty_rad), from});
+        rows.push_back(
+            {o.symbol, o.axis, o.commanded_rad ? fixed(analysis::rad_to_deg(*o.commanded_rad), 3) + "°" : "–",
+             degrees(o.first_order_rad), arcseconds(o.first_order_rad), degrees(o.exact_rad), arcseconds(o.exact_rad),
+             arcseconds(o.uncertainty_rad,  // more decimals for a small u, as plus_minus does
+                        o.uncertainty_rad
+                            ? uncertainty_decimals(analysis::rad_to_arcsec(*o.uncertainty_rad), kArcsecDecimals)
+                            : kArcsecDecimals),
+             from});
     }
     doc.table({{"error", 0.6},
                {"axis", 0.45},
