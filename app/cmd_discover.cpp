@@ -121,11 +121,23 @@ json details_json(const ba::DiscoveryResult& r, const std::vector<std::string>& 
                           }()}});
         return t;
     };
+    auto um = [](const std::vector<double>& mm) {
+        std::vector<double> out;
+        for (double m : mm) out.push_back(m * 1e3);
+        return out;
+    };
+    json step_trends = json::array();  // each step's own before/after, against its variable
+    for (const ba::DiscoveryStep& st : r.steps)
+        step_trends.push_back({{"variable", std::string(ba::to_string(st.explained_by, r.type))},
+                               {"bin_centre", st.trend_before.bin_centre},
+                               {"before_um", um(st.trend_before.bin_mean_mm)},
+                               {"after_um", um(st.trend_after.bin_mean_mm)}});
     return {{"inputs", inputs},
             {"criterion", r.criterion_text},
             {"final_model", params_json(r.final_model, r.final_fit.model)},
             {"residuals_initial", trends(r.initial_residuals)},
-            {"residuals_final", trends(r.final_residuals)}};
+            {"residuals_final", trends(r.final_residuals)},
+            {"step_trends", step_trends}};
 }
 
 /// Stores the result with every input session and the extended model, one version per step.

@@ -359,6 +359,8 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
         st.value = (rss - rss_new) / std::max(rss_new / std::max(dof_new, 1.0), 1e-300);
         st.p_value = f_distribution_sf(st.value, 1.0, dof_new);
         st.explained_by = best_variable(r - r_new, ctx.variables);
+        st.trend_before = residual_trend(r, ctx.variables, st.explained_by);
+        st.trend_after = residual_trend(r_new, ctx.variables, st.explained_by);
         st.model_after = refit.model;
         st.candidates = sc.scores;
         std::sort(st.candidates.begin(), st.candidates.end(), [](const auto& a, const auto& b) { return a.f > b.f; });
@@ -434,6 +436,38 @@ double explained_r2(const Eigen::VectorXd& r, const Eigen::MatrixXd& vars, Expla
 
 }  // namespace
 
+VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables,
+                             ExplainingVariable v) {
+    if (variables.rows() != residual_mm.size())
+        throw AnalysisError("residual analysis: one row of variables per residual is needed");
+    VariableTrend t;
+    t.variable = v;
+    t.r2 = explained_r2(residual_mm, variables, v);
+    const Eigen::Index n = residual_mm.size();
+    if (v == ExplainingVariable::bar_direction || n == 0) return t;
+    const auto col = static_cast<Eigen::Index>(v);
+    std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
+    std::iota(order.begin(), order.end(), Eigen::Index{0});
+    std::stable_sort(order.begin(), order.end(),
+                     [&](Eigen::Index a, Eigen::Index b) { return variables(a, col) < variables(b, col); });
+    constexpr int kBins = 8;
+    for (int b = 0; b < kBins; ++b) {
+        const std::size_t lo = order.size() * static_cast<std::size_t>(b) / kBins;
+        const std::size_t hi = order.size() * static_cast<std::size_t>(b + 1) / kBins;
+        if (hi <= lo) continue;
+        double sv = 0, sr = 0;
+        for (std::size_t i = lo; i < hi; ++i) {
+            sv += variables(order[i], col);
+            sr += residual_mm[order[i]];
+        }
+        const auto cnt = static_cast<double>(hi - lo);
+        t.bin_centre.push_back(sv / cnt);
+        t.bin_mean_mm.push_back(sr / cnt);
+        t.bin_count.push_back(cnt);
+    }
+    return t;
+}
+
 ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables) {
     if (variables.rows() != residual_mm.size())
         throw AnalysisError("residual analysis: one row of variables per residual is needed");
@@ -441,36 +475,12 @@ ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eig
     out.residual_mm = residual_mm;
     const Eigen::Index n = residual_mm.size();
     out.rms_mm = n > 0 ? std::sqrt(residual_mm.squaredNorm() / static_cast<double>(n)) : 0.0;
-    std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
     double best = -1;
     for (std::size_t k = 0; k < kExplainingVariableCount; ++k) {
-        const auto v = static_cast<ExplainingVariable>(k);
-        VariableTrend& t = out.trends[k];
-        t.variable = v;
-        t.r2 = explained_r2(residual_mm, variables, v);
-        if (t.r2 > best) {
-            best = t.r2;
-            out.best = v;
-        }
-        if (v == ExplainingVariable::bar_direction || n == 0) continue;
-        const auto col = static_cast<Eigen::Index>(k);
-        std::iota(order.begin(), order.end(), Eigen::Index{0});
-        std::stable_sort(order.begin(), order.end(),
-                         [&](Eigen::Index a, Eigen::Index b) { return variables(a, col) < variables(b, col); });
-        constexpr int kBins = 8;
-        for (int b = 0; b < kBins; ++b) {
-            const std::size_t lo = order.size() * static_cast<std::size_t>(b) / kBins;
-            const std::size_t hi = order.size() * static_cast<std::size_t>(b + 1) / kBins;
-            if (hi <= lo) continue;
-            double sv = 0, sr = 0;
-            for (std::size_t i = lo; i < hi; ++i) {
-                sv += variables(order[i], col);
-                sr += residual_mm[order[i]];
-            }
-            const auto cnt = static_cast<double>(hi - lo);
-            t.bin_centre.push_back(sv / cnt);
-            t.bin_mean_mm.push_back(sr / cnt);
-            t.bin_count.push_back(cnt);
+        out.trends[k] = residual_trend(residual_mm, variables, static_cast<ExplainingVariable>(k));
+        if (out.trends[k].r2 > best) {
+            best = out.trends[k].r2;
+            out.best = out.trends[k].variable;
         }
     }
     return out;

@@ -104,10 +104,12 @@ void figure_discovery(Document& doc, const std::vector<DiscoveryStep>& steps) {
             const auto& s = steps[j];
             Plot p("Step " + std::to_string(j + 1) + ": " + s.effect);
             p.x_axis(s.variable, s.variable_unit).y_axis("residual", "µm").include_zero_y();
-            if (s.binned) {  // binned means of the workflow's first and last residuals
-                p.line("before discovery (bin means)", s.x, s.before_um, kGrey, 0.8);
+            if (s.binned) {  // binned means: of this step's residuals, or the workflow's first and last
+                p.line(s.own_step ? "before the step (bin means)" : "before discovery (bin means)", s.x, s.before_um,
+                       kGrey, 0.8);
                 p.scatter("", s.x, s.before_um, kGrey, 1.8, true);
-                p.line("after discovery (bin means)", s.x, s.after_um, palette(0), 0.8);
+                p.line(s.own_step ? "after the step (bin means)" : "after discovery (bin means)", s.x, s.after_um,
+                       palette(0), 0.8);
                 p.scatter("", s.x, s.after_um, palette(0), 1.6);
             } else {
                 p.scatter("before (rms " + fixed(s.rms_before_um, kUmDecimals) + " µm)", s.x, s.before_um, kGrey, 1.5,

@@ -140,6 +140,7 @@ nlohmann::json to_json(const Report& r) {
                         {"rms_after_um", opt(s.rms_after_um)},
                         {"accepted", s.accepted ? json(*s.accepted) : json(nullptr)},
                         {"binned", s.binned},
+                        {"own_step", s.own_step},
                         {"note", s.note}});
 
     json comp = json::array();

@@ -205,7 +205,10 @@ void add_discovery(Report& r, std::string_view kind, const json& p) {
     const json* steps = find(p, "steps");
     if (!steps || !steps->is_array()) bad(kind, "steps", "must be an array");
     const json* details = find(p, "details");
+    const json* step_trends = details ? find(*details, "step_trends") : nullptr;
+    std::size_t index = 0;
     for (const auto& s : *steps) {
+        const std::size_t step_index = index++;
         DiscoveryStep d;
         d.effect = opt_str(kind, s, "effect");
         if (const std::string iso = opt_str(kind, s, "iso"); !iso.empty()) d.effect += " (" + iso + ")";
@@ -217,15 +220,29 @@ void add_discovery(Report& r, std::string_view kind, const json& p) {
             for (double v : nums(kind, s, "after_mm")) d.after_um.push_back(v * 1000);
             if (d.before_um.size() != d.x.size() || d.after_um.size() != d.x.size())
                 bad(kind, "x", "must have as many values as before_mm and after_mm");
-        } else {  // `ballbar discover`: binned trends of the whole run, before its first and after its last step
+        } else {  // `ballbar discover`: binned trends, the step's own or (older results) the whole run's
             const std::string v = opt_str(kind, s, "explained_by");
             const VariableInfo vi = variable_info(v);
             d.variable = vi.label;
             d.variable_unit = vi.unit;
+            if (step_trends && step_trends->is_array() && step_index < step_trends->size()) {
+                const json& t = (*step_trends)[step_index];
+                std::vector<double> x = nums(kind, t, "bin_centre");
+                std::vector<double> before = nums(kind, t, "before_um"), after = nums(kind, t, "after_um");
+                if (!x.empty() && before.size() == x.size() && after.size() == x.size()) {
+                    for (double& xv : x) xv *= vi.factor;
+                    d.x = std::move(x);
+                    d.before_um = std::move(before);
+                    d.after_um = std::move(after);
+                    d.binned = true;
+                    d.own_step = true;
+                }
+            }
             std::vector<double> xb, yb, xa, ya;
             const json* initial = details ? find(*details, "residuals_initial") : nullptr;
             const json* final_ = details ? find(*details, "residuals_final") : nullptr;
-            if (trend_of(kind, initial, v, xb, yb) && trend_of(kind, final_, v, xa, ya) && xa.size() == xb.size()) {
+            if (!d.binned && trend_of(kind, initial, v, xb, yb) && trend_of(kind, final_, v, xa, ya) &&
+                xa.size() == xb.size()) {
                 for (double& x : xb) x *= vi.factor;
                 d.x = xb;
                 d.before_um = yb;

@@ -208,6 +208,21 @@ TEST(Discovery, TwoHiddenEffectsAreBothNamed) {
         const bool ok = std::find(named.begin(), named.end(), a) != named.end() &&
                         std::find(named.begin(), named.end(), b) != named.end();
         EXPECT_TRUE(ok) << "seed " << seed << ": hid " << ba::effect_for(a).id << " and " << ba::effect_for(b).id;
+        // Each step carries its own residual trend: the first starts from the base fit's residuals,
+        // the last ends at the final ones, each against the step's own variable.
+        if (!r.steps.empty()) {
+            const auto& first = r.steps.front();
+            const auto& last = r.steps.back();
+            const auto v0 = static_cast<std::size_t>(first.explained_by);
+            const auto v1 = static_cast<std::size_t>(last.explained_by);
+            EXPECT_EQ(first.trend_before.bin_mean_mm, r.initial_residuals.trends[v0].bin_mean_mm) << "seed " << seed;
+            EXPECT_EQ(last.trend_after.bin_mean_mm, r.final_residuals.trends[v1].bin_mean_mm) << "seed " << seed;
+            if (r.steps.size() == 2 && first.explained_by != ba::ExplainingVariable::bar_direction) {
+                EXPECT_EQ(first.trend_before.bin_centre.size(), 8u);
+                EXPECT_NE(first.trend_after.bin_mean_mm, r.final_residuals.trends[v0].bin_mean_mm)
+                    << "seed " << seed << ": after step 1 the second effect is still in the residuals";
+            }
+        }
         EXPECT_EQ(named.size(), 2u) << "seed " << seed;
         EXPECT_LT(r.rms_final_mm, 1.3 * kNoise) << "seed " << seed;
         both += ok;

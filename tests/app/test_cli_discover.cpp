@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -108,6 +110,18 @@ TEST(CliDiscover, StoresResultAndModelHistoryWithTheSession) {
         q + "\"select count(*) from models where name='growth-test';\" > '" + (dir.path / "q").string() + "' 2>&1";
     ASSERT_EQ(std::system(cmd2.c_str()), 0);
     EXPECT_EQ(slurp(dir.path / "q"), "2\n");
+
+    // The session's report draws the step from its own before/after residual trend.
+    const CliRun rep = run(dir, "report 1 --json");
+    ASSERT_EQ(rep.code, 0) << rep.err;
+    const json disc = json::parse(rep.out)["discovery"];
+    ASSERT_EQ(disc.size(), 1u) << rep.out;
+    EXPECT_TRUE(disc[0]["own_step"].get<bool>());
+    EXPECT_EQ(disc[0]["x"].size(), 8u);
+    double before = 0, after = 0;
+    for (const auto& v : disc[0]["before_um"]) before = std::max(before, std::abs(v.get<double>()));
+    for (const auto& v : disc[0]["after_um"]) after = std::max(after, std::abs(v.get<double>()));
+    EXPECT_GT(before, 3 * after) << "the growth's trend is gone after the step";
 }
 
 }  // namespace

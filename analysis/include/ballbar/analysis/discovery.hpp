@@ -61,6 +61,9 @@ struct ResidualAnalysis {
 
 /// Analyses `residual_mm` against `variables` (from explaining_variables()).
 ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables);
+/// The same for one variable.
+VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables,
+                             ExplainingVariable v);
 
 /// One candidate's score in one step.
 struct CandidateScore {
@@ -82,6 +85,8 @@ struct DiscoveryStep {
     double value = 0;       ///< F statistic of the refitted model against the previous one
     double p_value = 1;
     ExplainingVariable explained_by = ExplainingVariable::bar_direction;
+    /// The residuals against `explained_by`, before and after this step (what the report draws).
+    VariableTrend trend_before, trend_after;
     std::vector<CandidateScore> candidates;  ///< every candidate of the step, best first
     ErrorParams model_after{};               ///< the model's parameters after the step's refit
 };

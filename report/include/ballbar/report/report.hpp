@@ -124,7 +124,9 @@ struct DiscoveryStep {
     std::vector<double> before_um, after_um;  ///< residuals at each reading (same length as x)
     std::optional<double> rms_before_um, rms_after_um;
     std::optional<bool> accepted;
-    bool binned = false;  ///< before/after are binned means of the whole workflow's first and last residuals
+    bool binned = false;    ///< before/after are binned means (8 quantile bins of the variable)
+    bool own_step = false;  ///< binned: of this step's residuals before and after it (else the whole
+                            ///< workflow's first and last, as results stored before step trends were)
     std::string note;
 };
 
