@@ -106,7 +106,8 @@ Store::Store(const std::string& path, StoreOptions options)
     if (app_id == 0 && db_.query_int("SELECT count(*) FROM sqlite_schema") > 0) {
         throw StorageError(Kind::invalid, path + " is an SQLite database but not a ballbar one; not changed");
     }
-    if (options_.read_only) return;
+    schema_version_ = static_cast<int>(version);
+    if (options_.read_only) return;  // an older schema is read as it is (see transitions())
 
     if (!is_memory(path)) {
         db_.exec("PRAGMA journal_mode = WAL");
@@ -118,6 +119,7 @@ Store::Store(const std::string& path, StoreOptions options)
     db_.exec(options_.sync_full ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
     db_.exec("PRAGMA foreign_keys = ON");
     migrate();
+    schema_version_ = kSchemaVersion;
     if (options_.recover) recover_unfinished();
 }
 

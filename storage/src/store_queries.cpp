@@ -101,9 +101,10 @@ std::int64_t Store::find_session(std::string_view key) {
 }
 
 std::vector<Transition> Store::transitions(std::int64_t session_id) {
-    auto st = db_.prepare(
-        "SELECT from_state, to_state, event, at FROM session_transitions WHERE session_id = ? AND scope = "
-        "'session' ORDER BY id");
+    auto st = db_.prepare(schema_version_ >= 2 ? "SELECT from_state, to_state, event, at FROM session_transitions "
+                                                 "WHERE session_id = ? AND scope = 'session' ORDER BY id"
+                                               : "SELECT from_state, to_state, event, at FROM session_transitions "
+                                                 "WHERE session_id = ? ORDER BY id");  // v1, opened read-only
     st.bind(1, session_id);
     std::vector<Transition> out;
     while (st.step()) {
@@ -126,6 +127,9 @@ void Store::add_procedure_step(std::int64_t session_id, const ProcedureStep& ste
 }
 
 std::vector<ProcedureStep> Store::procedure_steps(std::int64_t session_id) {
+    // A v1 database opened read-only (not migrated) keeps them as results of kind
+    // 'acquisition.transition', which results() returns.
+    if (schema_version_ < 2) return {};
     auto st = db_.prepare(
         "SELECT from_state, to_state, event, detail, at FROM session_transitions WHERE session_id = ? AND scope = "
         "'procedure' ORDER BY id");

@@ -78,6 +78,24 @@ TEST(Migration, V1ProcedureStepsMoveIntoTheTransitionsTable) {
     EXPECT_FALSE(after.back().at.empty());
 }
 
+TEST(Migration, V1OpenedReadOnlyIsReadAsItIsAndNotChanged) {
+    TempDir dir;
+    const std::string path = dir.file("v1.db");
+    make_v1(path);
+    {
+        StoreOptions ro;
+        ro.read_only = true;
+        Store store(path, ro);
+        EXPECT_EQ(store.schema_version(), 1);
+        EXPECT_EQ(store.transitions(1).size(), 3u);     // no scope column to filter on
+        EXPECT_TRUE(store.procedure_steps(1).empty());  // v1 keeps them as results ...
+        EXPECT_EQ(store.results(1).size(), 4u);         // ... which are all still there
+        EXPECT_EQ(store.results(1)[0].kind, "acquisition.transition");
+    }
+    Database db(path);
+    EXPECT_EQ(db.query_int("PRAGMA user_version"), 1) << "a read-only open migrates nothing";
+}
+
 TEST(Migration, ProcedureStepsStayOutOfTheLifecycle) {
     TempDir dir;
     Store store(dir.file("new.db"));

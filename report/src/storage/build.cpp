@@ -172,6 +172,11 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
             throw ReportError("result " + std::to_string(res.id) + " (" + res.kind +
                               "): payload is not JSON: " + e.what());
         }
+        if (res.kind == "acquisition.transition" && payload.is_object()) {  // a v1 file read as it is
+            payload["at"] = res.created_at;
+            const double wall = parse_iso8601(res.created_at);
+            payload["time_s"] = std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0;
+        }
         if (res.kind == "identification" && payload.is_object() && !payload.contains("name") && res.model_id) {
             const storage::ModelRecord m = store.model(*res.model_id);  // the model version it produced
             payload["name"] = m.name + " v" + std::to_string(m.version);

@@ -183,8 +183,11 @@ class Store {
     std::vector<Transition> transitions(std::int64_t session_id);
     /// Records a step of the guided procedure; committed at once (the audit trail of a measurement).
     void add_procedure_step(std::int64_t session_id, const ProcedureStep& step);
-    /// The procedure's steps, oldest first.
+    /// The procedure's steps, oldest first. Empty for a schema-v1 file opened read-only: v1 kept them
+    /// as results of kind "acquisition.transition" (results() returns those).
     std::vector<ProcedureStep> procedure_steps(std::int64_t session_id);
+    /// The file's schema version: kSchemaVersion, or older for a file opened read-only (not migrated).
+    int schema_version() const { return schema_version_; }
     void set_notes(std::int64_t session_id, std::string_view notes);
 
     // Samples (write them with SampleWriter) ----------------------------------------------------------
@@ -230,6 +233,7 @@ class Store {
     StoreOptions options_;
     Database db_;
     int lock_fd_ = -1;
+    int schema_version_ = kSchemaVersion;  // of the file: older only when opened read-only
     std::vector<std::int64_t> owned_;
     std::vector<std::int64_t> recovered_;
     std::uint64_t uuid_state_ = 0;
