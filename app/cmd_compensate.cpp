@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ballbar/analysis/compensate.hpp"
@@ -112,6 +113,61 @@ ba::NcDialect pick_dialect(const CompensateArgs& args) {
     return ext == ".ngc" ? ba::NcDialect::LinuxCNC : ba::NcDialect::Fanuc;
 }
 
+/// Where the compensated program goes. A regular file (new or not) is written as OUT.part beside it
+/// and renamed over it by commit(), keeping its permissions; until then the destructor removes the
+/// .part, so a program with an error, a full disk or any exception leaves OUT as it was. A symlink is
+/// followed. Anything else that exists (a FIFO, /dev/stdout) is written directly. A directory is
+/// refused before any work.
+class OutputFile {
+  public:
+    explicit OutputFile(const std::string& name) : name_(name), target_(name) {
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        const fs::file_status st = fs::status(target_, ec);  // through symlinks
+        if (fs::is_directory(st)) throw CliError(kExitUsage, "--out " + name_ + " is a directory");
+        direct_ = fs::exists(st) && !fs::is_regular_file(st);
+        if (fs::is_regular_file(st) && fs::is_symlink(fs::symlink_status(target_, ec))) {
+            const fs::path real = fs::canonical(target_, ec);  // replace the file, keep the link
+            if (!ec) target_ = real;
+        }
+        path_ = target_;
+        if (!direct_) path_ += ".part";
+        out_.open(path_, std::ios::binary | std::ios::trunc);
+        if (!out_) throw CliError(kExitFailure, "cannot write " + path_.string());
+        open_ = true;
+    }
+    ~OutputFile() {
+        if (committed_ || direct_ || !open_) return;
+        out_.close();
+        std::error_code ec;
+        std::filesystem::remove(path_, ec);
+    }
+    OutputFile(const OutputFile&) = delete;
+    OutputFile& operator=(const OutputFile&) = delete;
+
+    void write(std::string_view text) {
+        out_.write(text.data(), static_cast<std::streamsize>(text.size()));
+        if (!out_) throw CliError(kExitFailure, "write failed: " + name_);
+    }
+    void commit() {
+        out_.close();
+        if (!out_) throw CliError(kExitFailure, "write failed: " + name_);
+        if (direct_) return;
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        if (fs::is_regular_file(target_, ec)) fs::permissions(path_, fs::status(target_, ec).permissions(), ec);
+        fs::rename(path_, target_, ec);
+        if (ec) throw CliError(kExitFailure, "cannot write " + name_ + ": " + ec.message());
+        committed_ = true;
+    }
+
+  private:
+    std::string name_;
+    std::filesystem::path target_, path_;
+    std::ofstream out_;
+    bool direct_ = false, open_ = false, committed_ = false;
+};
+
 int run_compensate(const CompensateArgs& args, const Globals& globals) {
     const Model model = load_model(args.model, globals);
     const ba::NcDialect dialect = pick_dialect(args);
@@ -121,25 +177,14 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     const ba::Compensator comp(model.machine, model.params, co);
     const bool second_is_c = ba::rotary_axes(model.machine.type).second == 'C';
 
-    // Streams: one block is parsed, compensated and written at a time, and the output goes to a
-    // temporary file in chunks, renamed over --out only when the whole program is done (a program
-    // with an error leaves no half-written output behind).
-    const std::filesystem::path out_path(args.out);
-    std::filesystem::path tmp_path = out_path;
-    tmp_path += ".part";
-    std::ofstream out(tmp_path, std::ios::binary | std::ios::trunc);
-    if (!out) throw CliError(kExitFailure, "cannot write " + args.out);
+    // Streams: one block is parsed, compensated and written at a time, in 1 MiB chunks.
+    OutputFile out(args.out);
     std::string chunk;
     constexpr std::size_t kChunkBytes = 1 << 20;
     chunk.reserve(kChunkBytes + 4096);
     auto flush = [&] {
-        out.write(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+        out.write(chunk);
         chunk.clear();
-        if (!out) {
-            std::error_code ec;
-            std::filesystem::remove(tmp_path, ec);
-            throw CliError(kExitFailure, "write failed: " + args.out);
-        }
     };
 
     std::size_t blocks = 0;
@@ -186,18 +231,11 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
             if (chunk.size() >= kChunkBytes) flush();
         }
     } catch (const ba::NcError& e) {
-        out.close();
-        std::error_code ec;
-        std::filesystem::remove(tmp_path, ec);
-        throw CliError(kExitUsage, args.program + ": " + e.what());
+        throw CliError(kExitUsage, args.program + ": " + e.what());  // `out` removes its .part
     }
     ba::write_nc_footer(chunk, dialect);
     flush();
-    out.close();
-    if (!out) throw CliError(kExitFailure, "write failed: " + args.out);
-    std::error_code ec;
-    std::filesystem::rename(tmp_path, out_path, ec);
-    if (ec) throw CliError(kExitFailure, "cannot write " + args.out + ": " + ec.message());
+    out.commit();
     if (args.json) {
         json j{{"blocks", blocks},
                {"compensated", compensated},

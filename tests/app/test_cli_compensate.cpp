@@ -203,6 +203,24 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
     EXPECT_NE(broken.err.find("line 50004"), std::string::npos) << broken.err;
     EXPECT_EQ(slurp(d.path / "keep.nc"), "precious\n");
     EXPECT_FALSE(fs::exists(d.path / "keep.nc.part"));
+
+    // --out: a directory is refused up front; a symlink to a file replaces the file, not the link; a
+    // FIFO (or /dev/stdout on a pipe) is written straight through.
+    const std::string compensate = "compensate --model '" + (d.path / "model.json").string() + "' --program '" +
+                                   (d.path / "in.nc").string() + "' --out ";
+    const CliRun dir_out = run(d, compensate + "'" + d.path.string() + "'");
+    EXPECT_EQ(dir_out.code, 2);
+    EXPECT_NE(dir_out.err.find("is a directory"), std::string::npos) << dir_out.err;
+    std::ofstream(d.path / "real.nc") << "old\n";
+    fs::create_symlink(d.path / "real.nc", d.path / "link.nc");
+    ASSERT_EQ(run(d, compensate + "'" + (d.path / "link.nc").string() + "'").code, 0);
+    EXPECT_TRUE(fs::is_symlink(d.path / "link.nc"));
+    EXPECT_NE(slurp(d.path / "real.nc").find("G1"), std::string::npos);
+    const std::string piped = std::string("'") + BALLBAR_EXE + "' --db '" + d.file("test.db") + "' " + compensate +
+                              "/dev/stdout | cat > '" + (d.path / "piped.nc").string() + "'";
+    ASSERT_EQ(std::system(piped.c_str()), 0);
+    EXPECT_NE(slurp(d.path / "piped.nc").find("G1"), std::string::npos);
+    EXPECT_NE(slurp(d.path / "piped.nc").find("compensated 3 of"), std::string::npos) << "and the summary after it";
 }
 
 TEST(CliIdentify, RefusesUnknownInputs) {
