@@ -93,41 +93,45 @@ OrientationSolution solve_test(const Plan& plan, int test, const Vec3& dV1, cons
     throw AnalysisError("unknown machine type");
 }
 
-/// First-order propagation: each ΔV component moved by ± its standard uncertainty (the solution is
-/// linear over a few µm to ~1e-4), the half differences added in quadrature.
+/// First-order propagation: the Jacobian of the exact solution with respect to the six ΔV components
+/// by central differences (a step of one standard uncertainty: the solution is linear over a few µm
+/// to ~1e-4), then J·diag(Σ1, Σ2)·Jᵀ.
 std::optional<OrientationErrors> propagated_std(const Plan& plan, int test, const Vec3& dV1, const Vec3& dV2,
-                                                const Vec3& std1, const Vec3& std2) {
-    double var[3] = {0, 0, 0};
-    bool any = false;
+                                                const Mat3& cov1, const Mat3& cov2) {
+    Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();
+    cov.topLeftCorner<3, 3>() = cov1;
+    cov.bottomRightCorner<3, 3>() = cov2;
+    if (!cov.allFinite() || !(cov.diagonal().maxCoeff() > 0)) return std::nullopt;
+    Eigen::Matrix<double, 3, 6> jac = Eigen::Matrix<double, 3, 6>::Zero();
     for (int i = 0; i < 6; ++i) {
-        const double h = i < 3 ? std1[i] : std2[i - 3];
-        if (!(h > 0) || !std::isfinite(h)) continue;
+        const double h = std::sqrt(std::max(cov(i, i), 0.0));
+        if (!(h > 0)) continue;
         Vec3 up1 = dV1, up2 = dV2, down1 = dV1, down2 = dV2;
         (i < 3 ? up1[i] : up2[i - 3]) += h;
         (i < 3 ? down1[i] : down2[i - 3]) -= h;
         const auto up = solve_test(plan, test, up1, up2).exact;
         const auto down = solve_test(plan, test, down1, down2).exact;
         if (!up || !down) return std::nullopt;  // singular within one uncertainty
-        const double d[3] = {up->d_alpha_rad - down->d_alpha_rad, up->d_beta_rad - down->d_beta_rad,
-                             up->d_gamma_rad - down->d_gamma_rad};
-        for (int k = 0; k < 3; ++k) var[k] += 0.25 * d[k] * d[k];
-        any = true;
+        jac.col(i) = Vec3(up->d_alpha_rad - down->d_alpha_rad, up->d_beta_rad - down->d_beta_rad,
+                          up->d_gamma_rad - down->d_gamma_rad) /
+                     (2 * h);
     }
-    if (!any) return std::nullopt;
-    return OrientationErrors{std::sqrt(var[0]), std::sqrt(var[1]), std::sqrt(var[2])};
+    const Mat3 out = jac * cov * jac.transpose();
+    return OrientationErrors{std::sqrt(std::max(out(0, 0), 0.0)), std::sqrt(std::max(out(1, 1), 0.0)),
+                             std::sqrt(std::max(out(2, 2), 0.0))};
 }
 
 }  // namespace
 
-TestResult compute_test(const Plan& plan, int test, const Vec3& dV1, const Vec3& dV2, const Vec3& std1,
-                        const Vec3& std2) {
+TestResult compute_test(const Plan& plan, int test, const Vec3& dV1, const Vec3& dV2, const Mat3& cov1,
+                        const Mat3& cov2) {
     TestResult r;
     r.test = test;
     r.kind = plan.spec.tests[static_cast<std::size_t>(test)].kind;
     r.dV1_mm = dV1;
     r.dV2_mm = dV2;
     r.orientation = solve_test(plan, test, dV1, dV2);
-    if (r.orientation.exact) r.std_rad = propagated_std(plan, test, dV1, dV2, std1, std2);
+    if (r.orientation.exact) r.std_rad = propagated_std(plan, test, dV1, dV2, cov1, cov2);
     return r;
 }
 

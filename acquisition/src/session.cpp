@@ -336,7 +336,8 @@ void Session::compute(int test) {
         sink_.on_location(l1);
         const LocationResult l2 = compute_location(plan_, test, 2, all.subspan(b, k));
         sink_.on_location(l2);
-        TestResult r = compute_test(plan_, test, l1.dV_mm, l2.dV_mm, l1.ssm.std_mm, l2.ssm.std_mm);
+        // ΔV = ±e: the sign does not change a covariance.
+        TestResult r = compute_test(plan_, test, l1.dV_mm, l2.dV_mm, l1.ssm.cov_mm2, l2.ssm.cov_mm2);
         sink_.on_test(r);
         summary_.tests.push_back(std::move(r));
     } catch (const AnalysisError& err) {

@@ -186,7 +186,8 @@ SsmResult solve_impl(const Vec3& socket_mm, std::span<const Vec3> points_mm, std
     linearise();  // Jacobian at the solution, for the uncertainty and the residual
     res.exact_mm = e;
     res.iterations = it;
-    res.std_mm = options.reading_std_mm * jtj.inverse().diagonal().cwiseSqrt();
+    res.cov_mm2 = options.reading_std_mm * options.reading_std_mm * jtj.inverse();
+    res.std_mm = res.cov_mm2.diagonal().cwiseSqrt();
     if (n > 3) res.residual_rms_mm = std::sqrt(ss / static_cast<double>(n));
     return res;
 }

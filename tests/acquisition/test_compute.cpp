@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 // The orientation errors' propagated uncertainty against a Monte Carlo of the same test: ΔV1 and ΔV2
-// drawn with the stated component uncertainties, solved exactly, the spread compared.
+// drawn with the stated covariances (strongly correlated components, as an ill-conditioned SSM
+// layout gives), solved exactly, the spread compared.
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
 #include <cmath>
 #include <random>
 
@@ -14,7 +16,16 @@ namespace ballbar::acquisition {
 namespace {
 
 using analysis::MachineType;
+using analysis::Mat3;
 using analysis::Vec3;
+
+/// A covariance with standard uncertainties `std` (mm) and correlation `rho` between every pair.
+Mat3 covariance(const Vec3& std, double rho) {
+    Mat3 c;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) c(i, j) = (i == j ? 1.0 : rho) * std[i] * std[j];
+    return c;
+}
 
 class OrientationUncertainty : public ::testing::TestWithParam<MachineType> {};
 
@@ -22,21 +33,23 @@ TEST_P(OrientationUncertainty, AgreesWithAMonteCarloOfTheSameTest) {
     const MachineFile m = seed_machine(GetParam());
     const Plan plan = make_plan(m, default_plan(m));
     const auto truth = true_values(plan, demo_errors(GetParam()));
-    const Vec3 std1(0.4e-3, 0.3e-3, 0.5e-3), std2(0.5e-3, 0.4e-3, 0.3e-3);  // mm
+    const Mat3 cov1 = covariance(Vec3(0.4e-3, 0.3e-3, 0.5e-3), 0.8);
+    const Mat3 cov2 = covariance(Vec3(0.5e-3, 0.4e-3, 0.3e-3), -0.45);
+    const Mat3 l1 = cov1.llt().matrixL(), l2 = cov2.llt().matrixL();
     std::mt19937_64 rng(11);
     std::normal_distribution<double> n01;
     for (int t = 0; t < plan.test_count(); ++t) {
         const Vec3 dV1 = truth[static_cast<std::size_t>(t)].result.dV1_mm;
         const Vec3 dV2 = truth[static_cast<std::size_t>(t)].result.dV2_mm;
-        const TestResult r = compute_test(plan, t, dV1, dV2, std1, std2);
+        const TestResult r = compute_test(plan, t, dV1, dV2, cov1, cov2);
         ASSERT_TRUE(r.orientation.exact && r.std_rad) << "test " << t + 1;
         EXPECT_FALSE(compute_test(plan, t, dV1, dV2).std_rad) << "no uncertainty without the inputs'";
 
         constexpr int kDraws = 4000;
         double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
         for (int k = 0; k < kDraws; ++k) {
-            const Vec3 n1(std1.x() * n01(rng), std1.y() * n01(rng), std1.z() * n01(rng));
-            const Vec3 n2(std2.x() * n01(rng), std2.y() * n01(rng), std2.z() * n01(rng));
+            const Vec3 n1 = l1 * Vec3(n01(rng), n01(rng), n01(rng));
+            const Vec3 n2 = l2 * Vec3(n01(rng), n01(rng), n01(rng));
             const auto e = compute_test(plan, t, dV1 + n1, dV2 + n2).orientation.exact;
             ASSERT_TRUE(e);
             const double v[3] = {e->d_alpha_rad, e->d_beta_rad, e->d_gamma_rad};

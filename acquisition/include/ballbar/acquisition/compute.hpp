@@ -19,12 +19,12 @@ double dv_sign(const Plan& plan, int test);
 /// SSM of one step from its captured points (all of the step's points, in order).
 LocationResult compute_location(const Plan& plan, int test, int step, std::span<const CapturedPoint> points);
 
-/// Orientation of a test from its two ΔV (seed sign convention). With the standard uncertainties of
-/// the ΔV components (SSM's std_mm), also the propagated standard uncertainty of the exact solution
-/// (TestResult::std_rad).
+/// Orientation of a test from its two ΔV (seed sign convention). With the covariances of the two ΔV
+/// (SSM's cov_mm2; the two locations are measured independently), also the propagated standard
+/// uncertainty of the exact solution (TestResult::std_rad).
 TestResult compute_test(const Plan& plan, int test, const analysis::Vec3& dV1_mm, const analysis::Vec3& dV2_mm,
-                        const analysis::Vec3& dV1_std_mm = analysis::Vec3::Zero(),
-                        const analysis::Vec3& dV2_std_mm = analysis::Vec3::Zero());
+                        const analysis::Mat3& dV1_cov_mm2 = analysis::Mat3::Zero(),
+                        const analysis::Mat3& dV2_cov_mm2 = analysis::Mat3::Zero());
 
 /// The truth of a simulated machine with errors `e` and a socket set-up offset: per test, the exact
 /// total position error (b − s)_actual − (b − s)_nominal at the step's points (common to them when the

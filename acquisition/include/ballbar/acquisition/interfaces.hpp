@@ -89,8 +89,8 @@ struct TestResult {
     TestKind kind = TestKind::BothAxes;
     analysis::Vec3 dV1_mm = analysis::Vec3::Zero(), dV2_mm = analysis::Vec3::Zero();
     analysis::OrientationSolution orientation;
-    /// Standard uncertainty of orientation.exact, propagated to first order from the ΔV components'
-    /// uncertainties (taken as independent); empty without them or at a singular pose.
+    /// Standard uncertainty of orientation.exact, propagated to first order from the covariances of
+    /// ΔV1 and ΔV2; empty without them or at a singular pose.
     std::optional<analysis::OrientationErrors> std_rad;
 };
 

@@ -38,6 +38,7 @@ struct SsmResult {
     Vec3 exact_mm = Vec3::Zero();           ///< exact nonlinear solution (root nearest zero)
     double condition_number = 0;            ///< 2-norm condition number of the unit bar directions
     Vec3 std_mm = Vec3::Zero();             ///< propagated standard uncertainty of each component of e
+    Mat3 cov_mm2 = Mat3::Zero();            ///< their covariance (std_mm is the root of its diagonal)
     std::optional<double> residual_rms_mm;  ///< RMS of the reading residuals; only for n > 3
     int iterations = 0;                     ///< iterations of the exact solver
     std::size_t n = 0;                      ///< number of readings used
