@@ -257,19 +257,21 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
             compensation_text = ss.str();
         }
         // Stored with the demo session, so its report shows the before/after (report/ reads kind
-        // "compensation").
-        json stored;
-        stored["metric"] = "RMS tool-ball error over a " + std::to_string(cr.path_blocks) +
-                           "-block test path, before and after " + (cr.exact ? "exact" : "first-order") +
-                           " compensation (compensation demo: its own emulated TTTRR machine, seed " +
-                           std::to_string(o.seed) + ")";
-        stored["axes"] = json::array();
-        for (int a = 0; a < 3; ++a)
-            stored["axes"].push_back({{"axis", std::string(1, "XYZ"[a])},
-                                      {"unit", "µm"},
-                                      {"before", cr.before_um[a]},
-                                      {"after", cr.after_um[a]}});
-        store.add_result(id, "compensation", stored.dump(), std::nullopt, "ballbar demo/1");
+        // "compensation") -- only with a TTTRR session: the proof runs on an emulated TTTRR machine.
+        if (*type == ba::MachineType::TTTRR) {
+            json stored;
+            stored["metric"] = "RMS tool-ball error over a " + std::to_string(cr.path_blocks) +
+                               "-block test path, before and after " + (cr.exact ? "exact" : "first-order") +
+                               " compensation (compensation demo: its own emulated TTTRR machine, seed " +
+                               std::to_string(o.seed) + ")";
+            stored["axes"] = json::array();
+            for (int a = 0; a < 3; ++a)
+                stored["axes"].push_back({{"axis", std::string(1, "XYZ"[a])},
+                                          {"unit", "µm"},
+                                          {"before", cr.before_um[a]},
+                                          {"after", cr.after_um[a]}});
+            store.add_result(id, "compensation", stored.dump(), std::nullopt, "ballbar demo/1");
+        }
     }
 #else
     if (o.compensate) throw CliError(kExitFailure, "--compensate: this build has no compensation demo");

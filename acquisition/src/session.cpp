@@ -43,6 +43,12 @@ void Session::fire(Event e, std::string detail) {
     sink_.on_transition({from, to, e, std::move(detail)});
 }
 
+void Session::check_stop() {
+    // Before every read of the instrument and every question to the operator: a Ctrl-C that came
+    // while neither was waiting is seen here (one that comes during either cuts it short, EINTR).
+    if (options_.stop && options_.stop->load()) end(Event::Abort, "interrupted by the operator");
+}
+
 void Session::end(Event e, const std::string& reason) {
     // Whatever ends the session once a stop was requested (a prompt or a read cut short by the
     // signal) is the operator's interruption, not a failure of the instrument.
@@ -72,8 +78,10 @@ SessionSummary Session::run() {
         } catch (const SourceError& err) {
             end(Event::Fail, std::string("the instrument does not stream: ") + err.what());
         }
+        check_stop();
         op_.run_program(captured_.size());
         for (int t = 0; t < plan_.test_count(); ++t) measure_test(t);
+        check_stop();
         const bool ok = op_.confirm("accept", "Accept the results?");
         if (!ok) end(Event::Abort, "results not accepted by the operator");
         fire(Event::Accepted);
@@ -86,10 +94,12 @@ SessionSummary Session::run() {
 void Session::check_instrument() {
     if (status_.battery_pct < 5)
         end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
+    check_stop();
     if (!status_.bar_temp_C &&
         !op_.confirm("temperature", "The bar's temperature sensor failed. Measure without bar temperature?"))
         end(Event::Fail, "bar temperature sensor failed");
     if (!status_.referenced) {
+        check_stop();
         if (!op_.confirm("reference", "Put the bar in its calibrator to set the reference (zero). Ready?"))
             end(Event::Abort, "reference not set");
         try {
@@ -136,6 +146,7 @@ void Session::set_up() {
     const Vec3& s = plan_.spec.tests.front().socket_mm;
     os << "\nSocket at (" << s.x() << ", " << s.y() << ", " << s.z() << ") mm in the table frame.";
     if (!captured_.empty()) os << "\nResuming after " << captured_.size() << " captured points.";
+    check_stop();
     if (!op_.confirm("setup", os.str())) end(Event::Abort, "set-up not confirmed");
     fire(Event::SetUpConfirmed, std::string(to_string(g.type)) + ", " + std::to_string(plan_.test_count()) + " tests");
 }
@@ -205,6 +216,7 @@ void Session::capture_point(const PlannedPoint& planned, bool positioning) {
         if (why.empty() || attempts >= cs.retries) {
             if (!why.empty()) {
                 fire(Event::PointRejected, where(planned) + ": " + why);
+                check_stop();
                 switch (op_.point_failed(cp, why)) {
                     case PointFailureAction::Retry:
                         attempts = 0;
@@ -235,6 +247,7 @@ std::optional<WindowStats> Session::wait_for_window(const PlannedPoint& planned,
     DwellDetector& det = *detector_;
     det.set_expected(planned.nominal_mm);
     if (plan_.spec.capture.manual) {
+        check_stop();
         op_.wait_at_point(planned);
         if (positioning) fire(Event::InPosition, where(planned));
         det.capture_now();
@@ -265,7 +278,7 @@ std::optional<WindowStats> Session::wait_for_window(const PlannedPoint& planned,
 }
 
 void Session::fetch() {
-    if (options_.stop && options_.stop->load()) end(Event::Abort, "interrupted by the operator");
+    check_stop();
     buffer_pos_ = buffer_n_ = 0;
     std::size_t n = 0;
     const ReadStatus st = source_.read(buffer_, n, options_.read_timeout);
@@ -308,7 +321,7 @@ void Session::pause() {
     op_.message("Instrument lost: plug it back in; the session continues at " + at + ".");
     broken_ = true;
     for (int i = 0; i < options_.max_reconnect_attempts; ++i) {
-        if (options_.stop && options_.stop->load()) end(Event::Abort, "interrupted by the operator");
+        check_stop();
         bool back = false;
         try {
             back = source_.reconnect(options_.read_timeout);
@@ -319,6 +332,7 @@ void Session::pause() {
             silent_reads_ = 0;
             fire(Event::DeviceBack, "continuing at " + at);
             op_.message("Instrument back: continuing at " + at + ".");
+            check_stop();
             op_.run_program(std::min(captured_.size(), plan_.points.size() - 1));
             return;
         }

@@ -5,6 +5,9 @@
 // the orientation errors the same (exact) orientation model gives for those exact errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
+
 #include "ballbar/acquisition/compute.hpp"
 #include "ballbar/acquisition/session.hpp"
 #include "sim_source.hpp"
@@ -231,6 +234,50 @@ TEST(Session, DeclinedSetUpAborts) {
     Session session(plan, source, sink, op);
     EXPECT_EQ(session.run().final_state, State::Aborted);
     EXPECT_TRUE(sink.points.empty());
+}
+
+/// An operator who records the questions it is asked.
+class AskedOperator : public TestOperator {
+  public:
+    using TestOperator::TestOperator;
+    bool confirm(std::string_view what, std::string_view prompt) override {
+        asked.emplace_back(what);
+        return TestOperator::confirm(what, prompt);
+    }
+    std::vector<std::string> asked;
+};
+
+/// Ctrl-C (the stop flag) just after the last test's result: no read of the instrument follows, only
+/// the question whether to accept the results.
+class StopAfterLastTest : public RecordingSink {
+  public:
+    StopAfterLastTest(std::atomic<bool>& stop, std::size_t test_count) : stop_(stop), tests_(test_count) {}
+    void on_test(const TestResult& r) override {
+        RecordingSink::on_test(r);
+        if (tests.size() == tests_) stop_.store(true);
+    }
+
+  private:
+    std::atomic<bool>& stop_;
+    std::size_t tests_;
+};
+
+TEST(Session, CtrlCBeforeAPromptEndsTheSessionWithoutAskingIt) {
+    const MachineFile m = seed_machine(MachineType::TTTRR);
+    const Plan plan = make_plan(m, default_plan(m));
+    SimSource source(setup_for(plan), plan, SimOptions{});
+    std::atomic<bool> stop{false};
+    StopAfterLastTest sink(stop, static_cast<std::size_t>(plan.test_count()));
+    AskedOperator op(plan, &source);
+    SessionOptions options;
+    options.stop = &stop;
+    Session session(plan, source, sink, op, options);
+    const SessionSummary sum = session.run();
+    EXPECT_EQ(sum.final_state, State::Aborted);
+    EXPECT_TRUE(sum.interrupted);
+    EXPECT_EQ(sum.reason, "interrupted by the operator");
+    EXPECT_EQ(std::count(op.asked.begin(), op.asked.end(), "accept"), 0) << "the results were not offered";
+    EXPECT_EQ(sink.points.size(), plan.points.size()) << "what was captured is kept";
 }
 
 }  // namespace
