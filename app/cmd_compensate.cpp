@@ -113,45 +113,65 @@ ba::NcDialect pick_dialect(const CompensateArgs& args) {
     return ext == ".ngc" ? ba::NcDialect::LinuxCNC : ba::NcDialect::Fanuc;
 }
 
-/// Where the compensated program goes. A regular file (new or not) is written as OUT.part beside it
-/// and renamed over it by commit(), keeping its permissions; until then the destructor removes the
-/// .part, so a program with an error, a full disk or any exception leaves OUT as it was. A symlink is
-/// followed. Anything else that exists (a FIFO, /dev/stdout) is written directly. A directory is
-/// refused before any work.
+/// Where the compensated program goes. "-" or /dev/stdout (or a path to what stdout is): standard
+/// output itself, so the program and nothing else lands there (the caller prints its summary on
+/// stderr then). A regular file (new or not) is written as OUT.part beside it and renamed over it by
+/// commit(), keeping its permissions; until then the destructor removes the .part, so a program with
+/// an error, a full disk or any exception leaves OUT as it was. A symlink is followed. Anything else
+/// that exists (a FIFO, a device) and any path under /dev or /proc is written directly. A directory
+/// is refused before any work.
 class OutputFile {
   public:
     explicit OutputFile(const std::string& name) : name_(name), target_(name) {
         namespace fs = std::filesystem;
         std::error_code ec;
+        if (name == "-" || (fs::equivalent(target_, "/dev/stdout", ec) && !ec)) {
+            stdout_ = true;
+            os_ = &std::cout;
+            return;
+        }
         const fs::file_status st = fs::status(target_, ec);  // through symlinks
         if (fs::is_directory(st)) throw CliError(kExitUsage, "--out " + name_ + " is a directory");
-        direct_ = fs::exists(st) && !fs::is_regular_file(st);
-        if (fs::is_regular_file(st) && fs::is_symlink(fs::symlink_status(target_, ec))) {
+        // Device and process files (/dev/stderr, /proc/self/fd/N) are never renamed over.
+        const std::string abs = fs::absolute(target_, ec).lexically_normal().string();
+        direct_ =
+            (fs::exists(st) && !fs::is_regular_file(st)) || abs.rfind("/dev/", 0) == 0 || abs.rfind("/proc/", 0) == 0;
+        if (!direct_ && fs::is_symlink(fs::symlink_status(target_, ec))) {
             const fs::path real = fs::canonical(target_, ec);  // replace the file, keep the link
-            if (!ec) target_ = real;
+            if (ec || real.string().rfind("/proc/", 0) == 0 || real.string().rfind("/dev/", 0) == 0)
+                direct_ = true;
+            else
+                target_ = real;
         }
         path_ = target_;
         if (!direct_) path_ += ".part";
-        out_.open(path_, std::ios::binary | std::ios::trunc);
-        if (!out_) throw CliError(kExitFailure, "cannot write " + path_.string());
-        open_ = true;
+        file_.open(path_, std::ios::binary | std::ios::trunc);
+        if (!file_) throw CliError(kExitFailure, "cannot write " + path_.string());
+        os_ = &file_;
     }
     ~OutputFile() {
-        if (committed_ || direct_ || !open_) return;
-        out_.close();
+        if (committed_ || direct_ || stdout_ || !file_.is_open()) return;
+        file_.close();
         std::error_code ec;
         std::filesystem::remove(path_, ec);
     }
     OutputFile(const OutputFile&) = delete;
     OutputFile& operator=(const OutputFile&) = delete;
 
+    /// The program goes to standard output: the summary must not.
+    bool is_stdout() const { return stdout_; }
     void write(std::string_view text) {
-        out_.write(text.data(), static_cast<std::streamsize>(text.size()));
-        if (!out_) throw CliError(kExitFailure, "write failed: " + name_);
+        os_->write(text.data(), static_cast<std::streamsize>(text.size()));
+        if (!*os_) throw CliError(kExitFailure, "write failed: " + name_);
     }
     void commit() {
-        out_.close();
-        if (!out_) throw CliError(kExitFailure, "write failed: " + name_);
+        if (stdout_) {
+            std::cout.flush();
+            if (!std::cout) throw CliError(kExitFailure, "write failed: " + name_);
+            return;
+        }
+        file_.close();
+        if (!file_) throw CliError(kExitFailure, "write failed: " + name_);
         if (direct_) return;
         namespace fs = std::filesystem;
         std::error_code ec;
@@ -164,8 +184,9 @@ class OutputFile {
   private:
     std::string name_;
     std::filesystem::path target_, path_;
-    std::ofstream out_;
-    bool direct_ = false, open_ = false, committed_ = false;
+    std::ofstream file_;
+    std::ostream* os_ = nullptr;
+    bool stdout_ = false, direct_ = false, committed_ = false;
 };
 
 int run_compensate(const CompensateArgs& args, const Globals& globals) {
@@ -236,6 +257,7 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     ba::write_nc_footer(chunk, dialect);
     flush();
     out.commit();
+    std::ostream& report = out.is_stdout() ? std::cerr : std::cout;  // the program has stdout
     if (args.json) {
         json j{{"blocks", blocks},
                {"compensated", compensated},
@@ -247,17 +269,17 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
                {"singular_blocks", singular_count},
                {"singular_lines", singular_lines},
                {"out", args.out}};
-        std::cout << j.dump(2) << '\n';
+        report << j.dump(2) << '\n';
     } else {
-        std::cout << "compensated " << compensated << " of " << blocks << " blocks ("
-                  << (args.exact ? "exact" : "first-order") << ") -> " << args.out << '\n'
-                  << "largest correction: " << max_linear * 1e3 << " um linear (line " << max_linear_line << "), "
-                  << ba::rad_to_deg(max_rotary) * 3600.0 << " arcsec rotary (line " << max_rotary_line << ")\n";
+        report << "compensated " << compensated << " of " << blocks << " blocks ("
+               << (args.exact ? "exact" : "first-order") << ") -> " << args.out << '\n'
+               << "largest correction: " << max_linear * 1e3 << " um linear (line " << max_linear_line << "), "
+               << ba::rad_to_deg(max_rotary) * 3600.0 << " arcsec rotary (line " << max_rotary_line << ")\n";
         if (singular_count > 0) {
-            std::cout << singular_count << " block(s) within " << args.singular_deg
-                      << " deg of a singularity (rotary axis parallel to the tool): that axis was not corrected; lines";
-            for (int l : singular_lines) std::cout << ' ' << l;
-            std::cout << (singular_count > singular_lines.size() ? " ...\n" : "\n");
+            report << singular_count << " block(s) within " << args.singular_deg
+                   << " deg of a singularity (rotary axis parallel to the tool): that axis was not corrected; lines";
+            for (int l : singular_lines) report << ' ' << l;
+            report << (singular_count > singular_lines.size() ? " ...\n" : "\n");
         }
     }
     return kExitOk;
@@ -272,7 +294,7 @@ BALLBAR_COMMAND(compensate) {
     auto* sub = root.add_subcommand("compensate", "Rewrite an NC program through an identified error model");
     sub->add_option("--model", args->model, "ballbar-model/1 JSON file, model id or model name")->required();
     sub->add_option("--program", args->program, "NC program to compensate")->required();
-    sub->add_option("--out", args->out, "where to write the compensated program")->required();
+    sub->add_option("--out", args->out, "where to write the compensated program ('-': standard output)")->required();
     sub->add_option("--dialect", args->dialect, "fanuc or linuxcnc (default: by extension, .ngc = linuxcnc)");
     sub->add_flag("--exact", args->exact, "exact (Newton) solution instead of the first-order Jacobian one");
     sub->add_option("--singular-deg", args->singular_deg,

@@ -220,7 +220,17 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
                               "/dev/stdout | cat > '" + (d.path / "piped.nc").string() + "'";
     ASSERT_EQ(std::system(piped.c_str()), 0);
     EXPECT_NE(slurp(d.path / "piped.nc").find("G1"), std::string::npos);
-    EXPECT_NE(slurp(d.path / "piped.nc").find("compensated 3 of"), std::string::npos) << "and the summary after it";
+    EXPECT_TRUE(fs::is_symlink("/dev/stdout")) << "/dev/stdout is written through, never replaced";
+    // Standard output ('-' or /dev/stdout, redirected to a file here) holds the program and nothing
+    // else: the summary goes to stderr.
+    for (const char* dest : {"-", "/dev/stdout"}) {
+        const CliRun to_stdout = run(d, compensate + dest);
+        EXPECT_EQ(to_stdout.code, 0) << to_stdout.err;
+        EXPECT_EQ(to_stdout.out.rfind("%\nO0001", 0), 0u) << dest << ":\n" << to_stdout.out;
+        EXPECT_EQ(to_stdout.out.find("compensated 3 of"), std::string::npos) << dest;
+        EXPECT_NE(to_stdout.err.find("compensated 3 of"), std::string::npos) << dest << ": " << to_stdout.err;
+    }
+    EXPECT_TRUE(fs::is_symlink("/dev/stdout"));
 }
 
 TEST(CliIdentify, RefusesUnknownInputs) {
