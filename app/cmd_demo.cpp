@@ -133,7 +133,9 @@ json angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType 
     return j;
 }
 
-std::string arcsec(const json& angles) {
+/// `angles` in arcseconds ("d_alpha -46.66\""), each with ± its standard uncertainty from `std` when
+/// given.
+std::string arcsec(const json& angles, const json& std = nullptr) {
     std::ostringstream os;
     os.setf(std::ios::fixed);
     os.precision(2);
@@ -141,6 +143,7 @@ std::string arcsec(const json& angles) {
     bool first = true;
     for (const auto& [k, v] : angles.items()) {
         os << (first ? "" : "  ") << k << " " << ba::rad_to_arcsec(v.get<double>()) << "\"";
+        if (std.is_object() && std.contains(k)) os << " ± " << ba::rad_to_arcsec(std[k].get<double>()) << "\"";
         first = false;
     }
     return os.str();
@@ -233,6 +236,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
             {{"test", r.test + 1},
              {"kind", std::string(acq::to_string(r.kind))},
              {"measured_rad", angles_json(r.orientation.exact, *type, r.kind)},
+             {"std_rad", angles_json(r.std_rad, *type, r.kind)},  // of measured_rad
              {"true_rad", angles_json(t.result.orientation.exact, *type, r.kind)},
              {"measured_first_order_rad", angles_json(r.orientation.first_order, *type, r.kind)},
              {"true_first_order_rad", angles_json(t.result.orientation.first_order, *type, r.kind)}});
@@ -304,7 +308,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         std::printf("\nOrientation errors (exact model), arc-seconds:\n");
         for (const auto& t : out["orientation"])
             std::printf("  test %d (%s): measured %s | true %s\n", t["test"].get<int>(),
-                        t["kind"].get<std::string>().c_str(), arcsec(t["measured_rad"]).c_str(),
+                        t["kind"].get<std::string>().c_str(), arcsec(t["measured_rad"], t["std_rad"]).c_str(),
                         arcsec(t["true_rad"]).c_str());
         std::printf("\nSession %lld stored in %s (%zu samples).\n", static_cast<long long>(id), store.path().c_str(),
                     sum.samples);

@@ -67,9 +67,16 @@ TEST_P(Demo, RecoversTheEmulatorsErrorsThroughThePty) {
     ASSERT_EQ(j.at("orientation").size(), 4u);
     for (const auto& o : j.at("orientation")) {
         ASSERT_TRUE(o.at("measured_rad").is_object()) << o.dump();
+        ASSERT_TRUE(o.at("std_rad").is_object()) << o.dump();
         for (const auto& [k, v] : o.at("true_rad").items()) {
-            EXPECT_NEAR(o.at("measured_rad").at(k).get<double>(), v.get<double>(), kAngleTol_rad)
-                << k << " " << o.dump();
+            const double err = o.at("measured_rad").at(k).get<double>() - v.get<double>();
+            const double u = o.at("std_rad").at(k).get<double>();
+            EXPECT_NEAR(err, 0.0, kAngleTol_rad) << k << " " << o.dump();
+            // The stated uncertainty is honest: the error is within a few of it, and it is not
+            // inflated beyond what 0.1 µm of bar noise over these distances gives (well under 1″).
+            EXPECT_GT(u, 0.0) << k;
+            EXPECT_LT(std::abs(err), 5 * u + 1e-9) << k << " " << o.dump();
+            EXPECT_LT(u, 1.0 / 3600.0 * 3.141592653589793 / 180.0) << k;
         }
     }
     // The session is stored: a second demo gets the next id.
