@@ -45,15 +45,6 @@ struct Model {
     std::string source;
 };
 
-std::string read_text(const std::string& path, const char* what) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw CliError(kExitUsage, std::string("cannot read ") + what + " " + path);
-    std::ostringstream text;  // one bulk copy: a million-block program is ~50 MB
-    text << in.rdbuf();
-    if (in.bad()) throw CliError(kExitUsage, std::string("read failed: ") + what + " " + path);
-    return std::move(text).str();
-}
-
 Model parse_model(const std::string& text, const std::string& source) {
     json j;
     try {
@@ -86,7 +77,7 @@ Model parse_model(const std::string& text, const std::string& source) {
 
 Model load_model(const std::string& spec, const Globals& globals) {
     std::error_code ec;
-    if (std::filesystem::is_regular_file(spec, ec)) return parse_model(read_text(spec, "model"), spec);
+    if (std::filesystem::is_regular_file(spec, ec)) return parse_model(read_file(spec, "model"), spec);
     bs::Store store(resolve_db_path(globals));
     const bool numeric =
         !spec.empty() && std::all_of(spec.begin(), spec.end(), [](char c) { return c >= '0' && c <= '9'; });
@@ -133,12 +124,15 @@ class OutputFile {
         const fs::file_status st = fs::status(target_, ec);  // through symlinks
         if (fs::is_directory(st)) throw CliError(kExitUsage, "--out " + name_ + " is a directory");
         // Device and process files (/dev/stderr, /proc/self/fd/N) are never renamed over.
-        const std::string abs = fs::absolute(target_, ec).lexically_normal().string();
+        auto system_file = [](const fs::path& p) {
+            const std::string s = p.string();
+            return s.rfind("/dev/", 0) == 0 || s.rfind("/proc/", 0) == 0;
+        };
         direct_ =
-            (fs::exists(st) && !fs::is_regular_file(st)) || abs.rfind("/dev/", 0) == 0 || abs.rfind("/proc/", 0) == 0;
+            (fs::exists(st) && !fs::is_regular_file(st)) || system_file(fs::absolute(target_, ec).lexically_normal());
         if (!direct_ && fs::is_symlink(fs::symlink_status(target_, ec))) {
             const fs::path real = fs::canonical(target_, ec);  // replace the file, keep the link
-            if (ec || real.string().rfind("/proc/", 0) == 0 || real.string().rfind("/dev/", 0) == 0)
+            if (ec || system_file(real))
                 direct_ = true;
             else
                 target_ = real;
@@ -192,7 +186,7 @@ class OutputFile {
 int run_compensate(const CompensateArgs& args, const Globals& globals) {
     const Model model = load_model(args.model, globals);
     const ba::NcDialect dialect = pick_dialect(args);
-    const std::string text = read_text(args.program, "program");
+    const std::string text = read_file(args.program, "program");
     ba::CompensationOptions co;
     co.singular_tolerance = std::sin(ba::deg_to_rad(args.singular_deg));
     const ba::Compensator comp(model.machine, model.params, co);

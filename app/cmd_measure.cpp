@@ -35,14 +35,6 @@ struct MeasureOptions {
     std::size_t from_point = 0;
 };
 
-std::string read_file(const std::string& path, const char* what) {
-    std::ifstream f(path);
-    if (!f) throw CliError(kExitUsage, std::string("cannot read the ") + what + " " + path);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
 /// Plan-file answers, with the prompts and progress written to `out` line by line (logs, CI).
 class ScriptedTerminalOperator : public TerminalOperator {
   public:

@@ -56,4 +56,8 @@ struct CommandRegistrar {
 /// ~/.local/share/ballbar/ballbar.db. Creates the parent directory of the default.
 std::string resolve_db_path(const Globals& globals);
 
+/// The whole of a file (binary, one bulk copy). Throws CliError(kExitUsage) naming `what` ("machine
+/// file", "program") when it cannot be read.
+std::string read_file(const std::string& path, const char* what);
+
 }  // namespace ballbar::app

@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 #include <vector>
 
 #include "ballbar/version.hpp"
@@ -44,6 +46,15 @@ std::string resolve_db_path(const Globals& globals) {
     std::filesystem::create_directories(dir, ec);
     if (ec) throw CliError(kExitFailure, "cannot create " + dir.string() + ": " + ec.message());
     return (dir / "ballbar.db").string();
+}
+
+std::string read_file(const std::string& path, const char* what) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw CliError(kExitUsage, std::string("cannot read the ") + what + " " + path);
+    std::ostringstream text;  // a million-block NC program is ~50 MB
+    text << in.rdbuf();
+    if (in.bad()) throw CliError(kExitUsage, std::string("read failed: ") + what + " " + path);
+    return std::move(text).str();
 }
 
 }  // namespace ballbar::app

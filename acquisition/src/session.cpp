@@ -43,16 +43,20 @@ void Session::fire(Event e, std::string detail) {
     sink_.on_transition({from, to, e, std::move(detail)});
 }
 
+bool Session::stop_requested() const {
+    return options_.stop && options_.stop->load();
+}
+
 void Session::check_stop() {
     // Before every read of the instrument and every question to the operator: a Ctrl-C that came
     // while neither was waiting is seen here (one that comes during either cuts it short, EINTR).
-    if (options_.stop && options_.stop->load()) end(Event::Abort, "interrupted by the operator");
+    if (stop_requested()) end(Event::Abort, "interrupted by the operator");
 }
 
 void Session::end(Event e, const std::string& reason) {
     // Whatever ends the session once a stop was requested (a prompt or a read cut short by the
     // signal) is the operator's interruption, not a failure of the instrument.
-    if (options_.stop && options_.stop->load()) {
+    if (stop_requested()) {
         summary_.interrupted = true;
         summary_.reason = "interrupted by the operator";
         fire(Event::Abort, summary_.reason);

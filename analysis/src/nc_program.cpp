@@ -293,54 +293,52 @@ void write_nc_header(std::string& out, NcDialect dialect, std::string_view title
 
 void write_nc_block(std::string& out, const NcBlock& b, NcDialect dialect) {
     const bool fanuc = dialect == NcDialect::Fanuc;
-    {
-        if (b.motion == NcMotion::None && !b.raw.empty()) {
-            // A block ballbar does not interpret (M3 S1000, T1 M6, ...): kept verbatim, except the
-            // framing this writer adds itself.
-            std::string code = b.raw;
-            strip_comments(code, b.line, dialect);
-            const std::string_view body = trim(code);
-            if (!body.empty()) {
-                if (!is_framing(body)) {
-                    out += trim(b.raw);
-                    out += '\n';
-                }
-                return;
+    if (b.motion == NcMotion::None && !b.raw.empty()) {
+        // A block ballbar does not interpret (M3 S1000, T1 M6, ...): kept verbatim, except the
+        // framing this writer adds itself.
+        std::string code = b.raw;
+        strip_comments(code, b.line, dialect);
+        const std::string_view body = trim(code);
+        if (!body.empty()) {
+            if (!is_framing(body)) {
+                out += trim(b.raw);
+                out += '\n';
             }
+            return;
         }
-        // The line is built in place at the end of `out`; nothing is appended for an empty block.
-        const std::size_t start = out.size();
-        switch (b.motion) {
-            case NcMotion::Rapid:
-                out += "G0";
-                break;
-            case NcMotion::Feed:
-                out += "G1";
-                break;
-            case NcMotion::Dwell:
-                out += "G4";
-                if (fanuc)
-                    append_number(out, 'P', std::round(b.dwell_s * 1000.0), 0);
-                else
-                    append_number(out, 'P', b.dwell_s, 3);
-                break;
-            case NcMotion::None:
-                break;
-        }
-        if (b.X_mm) append_number(out, 'X', *b.X_mm);
-        if (b.Y_mm) append_number(out, 'Y', *b.Y_mm);
-        if (b.Z_mm) append_number(out, 'Z', *b.Z_mm);
-        if (b.A_rad) append_number(out, 'A', rad_to_deg(*b.A_rad));
-        if (b.B_rad) append_number(out, 'B', rad_to_deg(*b.B_rad));
-        if (b.C_rad) append_number(out, 'C', rad_to_deg(*b.C_rad));
-        if (!b.extra_words.empty()) out.append(" ").append(b.extra_words);
-        if (b.feed_mm_min && b.motion == NcMotion::Feed) append_number(out, 'F', *b.feed_mm_min, 1);
-        if (!b.comment.empty()) {
-            if (out.size() > start) out += ' ';
-            out.append("(").append(b.comment).append(")");
-        }
-        if (out.size() > start) out += '\n';
     }
+    // The line is built in place at the end of `out`; nothing is appended for an empty block.
+    const std::size_t start = out.size();
+    switch (b.motion) {
+        case NcMotion::Rapid:
+            out += "G0";
+            break;
+        case NcMotion::Feed:
+            out += "G1";
+            break;
+        case NcMotion::Dwell:
+            out += "G4";
+            if (fanuc)
+                append_number(out, 'P', std::round(b.dwell_s * 1000.0), 0);
+            else
+                append_number(out, 'P', b.dwell_s, 3);
+            break;
+        case NcMotion::None:
+            break;
+    }
+    if (b.X_mm) append_number(out, 'X', *b.X_mm);
+    if (b.Y_mm) append_number(out, 'Y', *b.Y_mm);
+    if (b.Z_mm) append_number(out, 'Z', *b.Z_mm);
+    if (b.A_rad) append_number(out, 'A', rad_to_deg(*b.A_rad));
+    if (b.B_rad) append_number(out, 'B', rad_to_deg(*b.B_rad));
+    if (b.C_rad) append_number(out, 'C', rad_to_deg(*b.C_rad));
+    if (!b.extra_words.empty()) out.append(" ").append(b.extra_words);
+    if (b.feed_mm_min && b.motion == NcMotion::Feed) append_number(out, 'F', *b.feed_mm_min, 1);
+    if (!b.comment.empty()) {
+        if (out.size() > start) out += ' ';
+        out.append("(").append(b.comment).append(")");
+    }
+    if (out.size() > start) out += '\n';
 }
 
 void write_nc_footer(std::string& out, NcDialect dialect) {

@@ -62,7 +62,8 @@ class Session {
     class Stop {};  // unwinds run() when the session ends early
     void fire(Event e, std::string detail = {});
     void end(Event e, const std::string& reason);
-    void check_stop();  // ends the session (interrupted) once SessionOptions::stop is set
+    bool stop_requested() const;  // SessionOptions::stop is set
+    void check_stop();            // ends the session (interrupted) once it is
     void check_instrument();
     void set_up();
     void measure_test(int test);
