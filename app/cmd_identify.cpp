@@ -124,12 +124,16 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     std::vector<ba::ReadingSet> sets;
     std::vector<std::int64_t> sessions;
     std::unique_ptr<bs::Store> store;
-    auto open_store = [&]() -> bs::Store& {
-        if (!store) store = std::make_unique<bs::Store>(resolve_db_path(globals));
+    // Sessions are read from an existing database only (a mistyped --db is an error, not a new
+    // file); storing the model from readings files alone may create it.
+    auto open_store = [&](bool create) -> bs::Store& {
+        if (!store) store = std::make_unique<bs::Store>(create ? resolve_db_path(globals) : existing_db_path(globals));
         return *store;
     };
     for (const std::string& in : args.inputs) {
         std::error_code ec;
+        if (!std::filesystem::exists(in, ec) && !looks_like_session_key(in))
+            throw CliError(kExitUsage, "no such file: " + in);
         if (std::filesystem::is_regular_file(in, ec)) {
             try {
                 sets.push_back(bs::read_readings_file(in).set);
@@ -137,7 +141,7 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
                 throw CliError(kExitUsage, in + ": " + e.what());
             }
         } else {
-            bs::Store& st = open_store();
+            bs::Store& st = open_store(false);
             std::int64_t id = 0;
             try {
                 id = st.find_session(in);
@@ -167,7 +171,7 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     const json model = model_json(readings.machine, fit);
     out["model"] = model;
     if (!args.no_store && fit.converged) {
-        bs::Store& st = open_store();
+        bs::Store& st = open_store(true);
         const std::string name = !args.name.empty()               ? args.name
                                  : !readings.machine.name.empty() ? readings.machine.name
                                                                   : std::string(ba::to_string(readings.machine.type));

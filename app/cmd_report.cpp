@@ -13,6 +13,7 @@
 #include "ballbar/storage/store.hpp"
 #include "ballbar/version.hpp"
 #include "command.hpp"
+#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -39,7 +40,7 @@ int run_report(const ReportOptions& o, const Globals& globals) {
     try {
         id = store->find_session(o.session);
     } catch (const storage::StorageError& e) {
-        throw CliError(kExitUsage, "no session '" + o.session + "': " + e.what());
+        throw cli_error(e);  // "no session \"99\"" (exit 2), once
     }
     report::BuildOptions bo;
     bo.software_version = kVersion;

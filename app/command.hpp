@@ -11,7 +11,7 @@
 
 namespace ballbar::app {
 
-/// Exit codes of the `ballbar` command (documented in docs/cli.md).
+/// Exit codes of the `ballbar` command (the table in docs/cli.md).
 enum ExitCode : int {
     kExitOk = 0,
     kExitFailure = 1,      ///< the operation failed (device lost, database error, measurement refused)
@@ -52,9 +52,21 @@ struct CommandRegistrar {
     static void ballbar_setup_##ident([[maybe_unused]] CLI::App& root,                                       \
                                       [[maybe_unused]] ::ballbar::app::Globals& globals)
 
+/// Ends every subcommand's --help with its examples and the exit codes (app/help_footers.cpp).
+void add_help_footers(CLI::App& root);
+
 /// The database path to use: --db, else $XDG_DATA_HOME/ballbar/ballbar.db, else
 /// ~/.local/share/ballbar/ballbar.db. Creates the parent directory of the default.
 std::string resolve_db_path(const Globals& globals);
+
+/// The database path for a command that only reads sessions from it: like resolve_db_path, but a
+/// database that does not exist is the user's mistake (a mistyped --db), never created.
+/// Throws CliError(kExitUsage) naming the path.
+std::string existing_db_path(const Globals& globals);
+
+/// True when `arg` can only be a session key (an id or a uuid prefix: digits and hex letters), so a
+/// command taking "FILE or SESSION" can say "no such file" for anything else that is not a file.
+bool looks_like_session_key(std::string_view arg);
 
 /// The whole of a file (binary, one bulk copy). Throws CliError(kExitUsage) naming `what` ("machine
 /// file", "program") when it cannot be read.

@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "ballbar/version.hpp"
@@ -48,6 +50,20 @@ std::string resolve_db_path(const Globals& globals) {
     return (dir / "ballbar.db").string();
 }
 
+std::string existing_db_path(const Globals& globals) {
+    const std::string path = resolve_db_path(globals);
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec))
+        throw CliError(kExitUsage, "no database at " + path + (globals.db_path.empty() ? "" : " (check --db)"));
+    return path;
+}
+
+bool looks_like_session_key(std::string_view arg) {
+    return !arg.empty() && std::all_of(arg.begin(), arg.end(), [](char c) {
+        return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F') || c == '-';
+    });
+}
+
 std::string read_file(const std::string& path, const char* what) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw CliError(kExitUsage, std::string("cannot read the ") + what + " " + path);
@@ -57,6 +73,51 @@ std::string read_file(const std::string& path, const char* what) {
     return std::move(text).str();
 }
 
+namespace {
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            diagonal = up;
+        }
+    }
+    return row[b.size()];
+}
+
+/// The message for a first word that is no subcommand ("unknown command 'mesure'; did you mean
+/// 'measure'?"), or nothing. Global options before it (`--db PATH`) are skipped.
+std::optional<std::string> unknown_command(const CLI::App& root, int argc, char** argv) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string_view arg = argv[i];
+        if (arg == "--db") {
+            ++i;
+            continue;
+        }
+        if (arg.starts_with("-")) continue;
+        std::vector<std::string> names;
+        for (const CLI::App* s : root.get_subcommands([](const CLI::App* s) { return !s->get_group().empty(); }))
+            names.push_back(s->get_name());
+        if (std::find(names.begin(), names.end(), arg) != names.end()) return std::nullopt;
+        std::string best;
+        std::size_t best_d = 3;  // suggest only what is a small slip away
+        for (const auto& n : names) {
+            const std::size_t d = n.starts_with(arg) && arg.size() >= 2 ? 1 : edit_distance(arg, n);
+            if (d < best_d) best_d = d, best = n;
+        }
+        std::string msg = "unknown command '" + std::string(arg) + "'";
+        msg += best.empty() ? " (ballbar --help lists the commands)" : "; did you mean '" + best + "'?";
+        return msg;
+    }
+    return std::nullopt;
+}
+
+}  // namespace
 }  // namespace ballbar::app
 
 int main(int argc, char** argv) {
@@ -73,16 +134,29 @@ int main(int argc, char** argv) {
     auto& entries = registry();
     std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
     for (const auto& e : entries) e.setup(root, globals);
+    add_help_footers(root);
 
+    if (const auto unknown = unknown_command(root, argc, argv)) {
+        std::cerr << "ballbar: error: " << *unknown << '\n';
+        return kExitUsage;
+    }
     try {
         root.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return root.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return root.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return root.exit(e);
     } catch (const CLI::ParseError& e) {
-        return root.exit(e) == 0 ? kExitOk : kExitUsage;
+        // CLI11's own message, in the one error format, with where to look.
+        std::cerr << "ballbar: error: " << e.what() << "\nRun with --help for more information.\n";
+        return kExitUsage;
     }
     try {
         return globals.action ? globals.action() : kExitOk;
     } catch (const CliError& e) {
-        std::cerr << "ballbar: " << e.what() << '\n';
+        std::cerr << "ballbar: error: " << e.what() << '\n';
         return e.code();
     } catch (const std::exception& e) {
         std::cerr << "ballbar: error: " << e.what() << '\n';

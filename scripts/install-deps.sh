@@ -23,6 +23,10 @@ packages=(
   sqlite3                     # the sqlite3 shell: benchmark comparison, inspection
   poppler-utils               # pdftotext/pdfinfo: report tests
   clang libclang-rt-14-dev    # libFuzzer target for the protocol decoder
+  # packaging
+  help2man                    # man pages generated from the commands' own --help
+  lintian                     # checks the Debian package (CI)
+  mmdebstrap                  # scripts/test-package.sh: a clean Debian 12 root to install the package into
 )
 
 SUDO=""

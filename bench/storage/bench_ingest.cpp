@@ -142,14 +142,22 @@ void report(const char* name, const std::vector<Result>& runs, std::size_t n) {
 int main(int argc, char** argv) {
     std::size_t n = 2'000'000;
     int runs = 5;
-    fs::path dir = fs::temp_directory_path() / ("ballbar-bench-storage-" + std::to_string(::getpid()));
+    // Everything this program writes goes into a directory it makes itself (mkdtemp) inside --dir
+    // (default: the system's temporary directory), and only that directory is removed at the end:
+    // --dir names a place to work in, never something to delete.
+    fs::path parent = fs::temp_directory_path();
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i];
         if (a == "--samples") n = std::stoul(argv[i + 1]);
         if (a == "--runs") runs = std::stoi(argv[i + 1]);
-        if (a == "--dir") dir = argv[i + 1];
+        if (a == "--dir") parent = argv[i + 1];
     }
-    fs::create_directories(dir);
+    std::string tmpl = (parent / "ballbar-bench-storage-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) {
+        std::perror(("bench_ingest: cannot create a directory in " + parent.string()).c_str());
+        return 1;
+    }
+    const fs::path dir = tmpl;
     const auto samples = make_samples(n);
     const fs::path csv = dir / "samples.csv";
     {

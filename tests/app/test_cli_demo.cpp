@@ -85,7 +85,8 @@ TEST_P(Demo, RecoversTheEmulatorsErrorsThroughThePty) {
     EXPECT_EQ(nlohmann::json::parse(again.out).at("session").get<int>(), j.at("session").get<int>() + 1);
 }
 
-INSTANTIATE_TEST_SUITE_P(AllTypes, Demo, ::testing::Values("RRTTT", "TTTRR", "RTTTR"));
+INSTANTIATE_TEST_SUITE_P(AllTypes, Demo, ::testing::Values("RRTTT", "TTTRR", "RTTTR"),
+                         [](const auto& p) { return std::string(p.param); });
 
 TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {
     const auto db = temp_db("human.db");

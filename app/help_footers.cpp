@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: MIT
+// The end of every subcommand's --help: examples and the exit codes. One table here, applied to the
+// registered commands after they are set up, so that every command's help has the same shape and a
+// command without examples is caught by a test (tests/app/test_cli_help.cpp).
+#include <map>
+#include <string>
+
+#include "command.hpp"
+
+namespace ballbar::app {
+namespace {
+
+const std::map<std::string, std::string>& examples() {
+    static const std::map<std::string, std::string> table{
+        {"compensate",
+         "  ballbar compensate --model tttrr --program part.nc --out part-comp.nc\n"
+         "  ballbar compensate --model model.json --program part.ngc --out - --exact > comp.ngc\n"},
+        {"completion", "  ballbar completion bash > ~/.local/share/bash-completion/completions/ballbar\n"},
+        {"demo",
+         "  ballbar demo                                 # TTTRR, the guided procedure on the emulator\n"
+         "  ballbar demo --machine RRTTT --json\n"
+         "  ballbar demo --report demo.pdf --compensate\n"},
+        {"devices", "  ballbar devices\n  ballbar devices --json\n"},
+        {"discover", "  ballbar discover readings.csv --json\n  ballbar discover 3\n"},
+        {"emulate", "  ballbar emulate --pty                        # prints the pty path to pass to measure\n"},
+        {"export",
+         "  ballbar export 3 --format readings --out s3.csv\n"
+         "  ballbar export 3 --format json --out s3.json\n"},
+        {"identify", "  ballbar identify 3 4 --json\n  ballbar identify readings.csv --params all --name mill-1\n"},
+        {"import", "  ballbar import s3.csv\n"},
+        {"measure",
+         "  ballbar measure --device serial:/dev/ttyACM0 --machine machine.json\n"
+         "  ballbar measure --device serial:/dev/pts/5 --machine machine.json --plan plan.json\n"
+         "  ballbar measure --resume 7 --device serial:/dev/ttyACM0\n"},
+        {"monitor", "  ballbar monitor --device serial:/dev/ttyACM0 --seconds 2 --json\n"},
+        {"report", "  ballbar report 3 --out s3.pdf\n  ballbar report 3 --json\n"},
+        {"sessions", "  ballbar sessions\n  ballbar sessions show 3 --json\n"},
+        {"solve", "  ballbar solve ssm < request.json\n  ballbar solve orientation --input request.json\n"},
+    };
+    return table;
+}
+
+constexpr const char* kExitCodes =
+    "Exit codes:\n"
+    "  0  success\n"
+    "  1  the operation failed (instrument lost, database error, measurement refused)\n"
+    "  2  bad command line or malformed input (the message names the option, field or line)\n"
+    "  3  interrupted (Ctrl-C); what was measured is stored and can be resumed";
+
+}  // namespace
+
+void add_help_footers(CLI::App& root) {
+    for (CLI::App* sub : root.get_subcommands([](CLI::App* s) { return !s->get_group().empty(); })) {
+        std::string footer = sub->get_footer();
+        if (footer.find("Examples:") == std::string::npos) {
+            const auto it = examples().find(sub->get_name());
+            if (it != examples().end()) footer = "Examples:\n" + it->second + (footer.empty() ? "" : "\n" + footer);
+        }
+        if (!footer.empty()) footer += footer.back() == '\n' ? "\n" : "\n\n";
+        sub->footer(footer + kExitCodes);
+    }
+    root.footer(std::string("Run `ballbar COMMAND --help` for a command's options and examples.\n") + kExitCodes);
+}
+
+}  // namespace ballbar::app
