@@ -25,9 +25,9 @@ std::string bar_length_mismatch(double plan_mm, double calibrated_mm, double tol
     const std::string where =
         plan_file.empty() ? "a plan file (--plan FILE)" : "the plan file " + std::string(plan_file);
     return "bar length mismatch: the plan is for a " + mm(plan_mm) + " mm bar, the instrument's bar is calibrated at " +
-           mm(calibrated_mm) + " mm (more than " + mm(tolerance_mm) +
-           " mm apart). Fix: mount and calibrate the " + mm(plan_mm) + " mm bar, or measure with this one by setting \"bar_length_mm\": " +
-           mm(calibrated_mm) + " in " + where + ".";
+           mm(calibrated_mm) + " mm (more than " + mm(tolerance_mm) + " mm apart). Fix: mount and calibrate the " +
+           mm(plan_mm) + " mm bar, or measure with this one by setting \"bar_length_mm\": " + mm(calibrated_mm) +
+           " in " + where + ".";
 }
 
 }  // namespace ballbar::acquisition

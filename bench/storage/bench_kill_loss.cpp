@@ -102,7 +102,8 @@ int main(int argc, char** argv) {
             wo.max_batch_device_time_us = static_cast<std::uint64_t>(std::stod(argv[++i]) * 1000);
         } else if (a == "--wall-ms" && has) {
             const double w = std::stod(argv[++i]);
-            wo.max_batch_wall_time = w > 0 ? milliseconds(static_cast<long>(w)) : duration_cast<milliseconds>(hours(24));
+            wo.max_batch_wall_time =
+                w > 0 ? milliseconds(static_cast<long>(w)) : duration_cast<milliseconds>(hours(24));
         } else if (a == "--dir" && has) {
             dir = argv[++i];
         } else if (a == "--child" && has) {
@@ -127,11 +128,11 @@ int main(int argc, char** argv) {
             return 1;
         }
     }
-    std::printf("SampleWriter batch %.0f ms of device time, wall-clock bound %s; %d kills\n",
-                static_cast<double>(wo.max_batch_device_time_us) * 1e-3,
-                wo.max_batch_wall_time < hours(1) ? (std::to_string(wo.max_batch_wall_time.count()) + " ms").c_str()
-                                                  : "off",
-                runs);
+    std::printf(
+        "SampleWriter batch %.0f ms of device time, wall-clock bound %s; %d kills\n",
+        static_cast<double>(wo.max_batch_device_time_us) * 1e-3,
+        wo.max_batch_wall_time < hours(1) ? (std::to_string(wo.max_batch_wall_time.count()) + " ms").c_str() : "off",
+        runs);
     std::mt19937 rng(20261201);
     std::uniform_int_distribution<int> delay(200, 1500);
     std::vector<double> losses;
@@ -141,12 +142,14 @@ int main(int argc, char** argv) {
         const pid_t pid = ::fork();
         if (pid == 0) {
             ::dup2(fds[1], STDOUT_FILENO);
-            std::vector<std::string> args = {"/proc/self/exe", "--child", db, "--batch-ms",
-                                              std::to_string(static_cast<double>(wo.max_batch_device_time_us) * 1e-3),
-                                              "--wall-ms",
-                                              std::to_string(wo.max_batch_wall_time < hours(1)
-                                                                 ? wo.max_batch_wall_time.count()
-                                                                 : 0)};
+            std::vector<std::string> args = {
+                "/proc/self/exe",
+                "--child",
+                db,
+                "--batch-ms",
+                std::to_string(static_cast<double>(wo.max_batch_device_time_us) * 1e-3),
+                "--wall-ms",
+                std::to_string(wo.max_batch_wall_time < hours(1) ? wo.max_batch_wall_time.count() : 0)};
             std::vector<char*> av;
             for (auto& s : args) av.push_back(s.data());
             av.push_back(nullptr);

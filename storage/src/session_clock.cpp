@@ -46,8 +46,9 @@ SessionClock::SessionClock(Store& store, std::int64_t id) {
     std::stable_sort(starts.begin(), starts.end(), [](const Start& a, const Start& b) {
         return a.seq < b.seq || (a.seq == b.seq && std::isfinite(a.wall_s) && !std::isfinite(b.wall_s));
     });
-    starts.erase(std::unique(starts.begin(), starts.end(), [](const Start& a, const Start& b) { return a.seq == b.seq; }),
-                 starts.end());
+    starts.erase(
+        std::unique(starts.begin(), starts.end(), [](const Start& a, const Start& b) { return a.seq == b.seq; }),
+        starts.end());
 
     auto sample_at = [&](std::uint64_t seq) {
         const auto v = store.samples(id, seq, 1);
