@@ -24,6 +24,7 @@ DeviceSource::DeviceSource(Opener open, int sample_rate_hz) : open_(std::move(op
 acq::InstrumentStatus DeviceSource::open_and_identify() {
     inst_ = std::make_unique<device::Instrument>(open_());
     info_ = inst_->identify();
+    if (on_identified) on_identified(*info_);
     const device::InstrumentStatus st = inst_->status();
     acq::InstrumentStatus s;
     s.description =

@@ -34,6 +34,9 @@ class DeviceSource : public acquisition::SampleSource {
     bool reconnect(std::chrono::milliseconds timeout) override;
 
     const std::optional<device::InstrumentInfo>& info() const { return info_; }
+    /// Called after every identify (connect, reconnect), before anything else is asked of the instrument
+    /// or the operator: records the identity with the session, checks the bar. May throw SourceError.
+    std::function<void(const device::InstrumentInfo&)> on_identified;
     std::uint64_t lost_frames() const { return lost_frames_ + (inst_ ? inst_->stats().lost_frames : 0); }
 
   private:

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "acquisition_adapters.hpp"
+#include "ballbar/acquisition/bar_check.hpp"
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/uri.hpp"
@@ -78,6 +79,17 @@ void print_results(std::ostream& out, const acq::SessionSummary& sum) {
     }
 }
 
+/// The identity the instrument reported, stored with the session (sessions show, the report).
+void record_instrument(storage::Store& store, std::int64_t id, const device::InstrumentInfo& info) {
+    storage::Instrument in;
+    in.model = info.model;
+    in.serial = info.serial;
+    in.firmware = info.firmware;
+    in.calibrated_length_mm = info.calibrated_length_mm;
+    in.calibration_date = info.calibration_date;
+    store.set_instrument(id, in);
+}
+
 /// --dry-run: plan, check and write the NC program; no instrument, no database.
 int dry_run(const MeasureOptions& o) {
     if (o.machine_file.empty()) throw CliError(kExitUsage, "--machine FILE is required");
@@ -115,6 +127,9 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     try {
         if (!o.resume.empty()) {
             id = store.find_session(o.resume);
+            const storage::SessionInfo before = store.session(id);  // why it stopped, shown first
+            std::cout << "Session " << id << " is " << storage::to_string(before.state)
+                      << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
             plan = load_plan(store, id);
             done = load_points(store, id, plan);
             store.resume_session(id);
@@ -159,6 +174,12 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
             throw acq::SourceError(e.what());
         }
     });
+    source.on_identified = [&store, id, &plan, &o](const device::InstrumentInfo& info) {
+        record_instrument(store, id, info);
+        const std::string mismatch = acq::bar_length_mismatch(plan.spec.bar_length_mm, info.calibrated_length_mm,
+                                                              plan.spec.capture.tolerance_mm, o.plan_file);
+        if (!mismatch.empty()) throw acq::SourceError(mismatch);
+    };
     StoreSink sink(store, id, plan);
     const InterruptGuard interrupt;  // Ctrl-C: stop, store, stay resumable, exit 3
     acq::SessionOptions options;

@@ -124,6 +124,8 @@ int run_monitor(const MonitorOptions& o) {
                          {"bar_temp_C", sum.temp_C},
                          {"invalid_frames", st.invalid_frames},
                          {"queue_drops", st.queue_drops},
+                         {"replayed_frames", st.replayed_frames},
+                         {"unknown_version_frames", st.unknown_version_frames},
                          {"model", info.model},
                          {"serial", info.serial},
                          {"device", o.device}};

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "ballbar/storage/session_clock.hpp"
 #include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
@@ -67,21 +68,65 @@ int show_session(const SessionsOptions& o, const Globals& globals) {
         return kExitOk;
     }
     const auto s = store.session(id);
-    std::cout << "session " << s.id << "  " << s.uuid << '\n'
-              << "  state       " << storage::to_string(s.state) << '\n'
-              << "  source      " << storage::to_string(s.source) << '\n'
+    std::cout << "session " << s.id << "  " << s.uuid << '\n' << "  state       " << storage::to_string(s.state);
+    if (s.state != storage::SessionState::completed && !s.reason.empty()) std::cout << "  (" << s.reason << ")";
+    std::cout << '\n';
+    if (s.resumable())
+        std::cout << "  resume      ballbar measure --resume " << s.id << " --device URI  (continues after its "
+                  << s.point_count << " points)\n";
+    std::cout << "  source      " << storage::to_string(s.source) << '\n'
               << "  procedure   " << s.procedure << '\n'
               << "  operator    " << s.operator_name << '\n'
               << "  machine     " << machine_label(s.machine) << '\n'
               << "  started     " << s.started_at << '\n'
               << "  ended       " << s.ended_at.value_or("-") << '\n';
     if (s.instrument) {
-        std::cout << "  instrument  " << s.instrument->model << " " << s.instrument->serial;
-        if (s.instrument->calibrated_length_mm) std::cout << " (" << *s.instrument->calibrated_length_mm << " mm)";
-        std::cout << '\n';
+        const auto& in = *s.instrument;
+        std::cout << "  instrument  " << (in.model.empty() ? "-" : in.model) << ", serial "
+                  << (in.serial.empty() ? "-" : in.serial) << ", firmware " << (in.firmware.empty() ? "-" : in.firmware)
+                  << ", calibrated length ";
+        if (in.calibrated_length_mm) {
+            char len[32];
+            std::snprintf(len, sizeof len, "%.4f mm", *in.calibrated_length_mm);
+            std::cout << len;
+        } else {
+            std::cout << "-";
+        }
+        std::cout << ", calibrated on " << (in.calibration_date.empty() ? "-" : in.calibration_date) << '\n';
+    } else {
+        std::cout << "  instrument  - (not recorded)\n";
     }
     if (!s.notes.empty()) std::cout << "  notes       " << s.notes << '\n';
-    std::cout << "  points      " << s.point_count << "\n  samples     " << s.sample_count << "\n  transitions\n";
+    std::cout << "  samples     " << s.sample_count;
+    if (s.sample_count > 0) {
+        const storage::SessionClock clock(store, id);
+        char span[160];
+        std::snprintf(span, sizeof span, ", %.1f s of samples from %.1f s to %.1f s of session time, %zu segment%s",
+                      clock.sampled_s(), clock.first_s(), clock.last_s(), clock.segments(),
+                      clock.segments() == 1 ? "" : "s (device clock runs: reconnects, resumes)");
+        std::cout << span;
+    }
+    std::cout << "\n  points      " << s.point_count << '\n';
+    for (const auto& p : store.points(id)) {
+        const auto& rd = p.reading;
+        char line[200];
+        std::string where;
+        if (rd.step > 0 && rd.location >= 0 && rd.point >= 0) {  // as measure numbers them: from 1
+            where = "test " + std::to_string((rd.location - (rd.step - 1)) / 2 + 1) + " step " +
+                    std::to_string(rd.step) + " point " + std::to_string(rd.point + 1);
+        } else {
+            where = "location " + std::to_string(rd.location) + " point " + std::to_string(rd.point);
+        }
+        std::snprintf(line, sizeof line, "    %-26s %10.5f mm (nominal %.5f mm)", where.c_str(), rd.measured_mm,
+                      p.nominal_mm);
+        std::cout << line;
+        if (rd.std_mm) {
+            std::snprintf(line, sizeof line, ", std %.2f µm", *rd.std_mm * 1e3);
+            std::cout << line;
+        }
+        std::cout << ", n " << rd.n << '\n';
+    }
+    std::cout << "  transitions\n";
     for (const auto& t : store.transitions(id)) {
         std::cout << "    " << t.at << "  " << (t.from ? std::string(storage::to_string(*t.from)) : std::string("-"))
                   << " -> " << storage::to_string(t.to) << "  (" << t.event << ")\n";

@@ -83,7 +83,7 @@ Result run_writer(const fs::path& dir, std::span<const analysis::BarSample> samp
     const double c0 = cpu_now(false);
     const auto t0 = Clock::now();
     {
-        storage::SampleWriter w(store, id, {UINT64_MAX, batch});
+        storage::SampleWriter w(store, id, {UINT64_MAX, batch, std::chrono::hours(1)});
         for (const auto& s : samples) w.append(s);
         w.flush();
     }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Protocol v1 codec: COBS framing, CRC-16/CCITT-FALSE, message bodies (docs/protocol.md).
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
@@ -234,6 +235,7 @@ std::size_t encode(const IdentifyReply& m, std::uint16_t seq, FrameBuffer& out) 
     w.u32(m.calibrated_length_nm);
     w.u16(m.resolution_nm);
     w.u32(m.range_nm);
+    w.u32(m.calibration_date);
     return encode_frame(MsgType::IdentifyReply, seq, w.span(), out);
 }
 
@@ -293,8 +295,43 @@ std::size_t encode(const ErrorReply& m, std::uint16_t seq, FrameBuffer& out) {
 
 // ---- parsing ----
 
+namespace {
+
+bool valid_date(std::uint32_t y, std::uint32_t m, std::uint32_t d) {
+    static constexpr std::array<std::uint32_t, 12> kDays = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+    if (y < 1900 || y > 9999 || m < 1 || m > 12 || d < 1 || d > kDays[m - 1]) return false;
+    const bool leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+    return !(m == 2 && d == 29 && !leap);
+}
+
+}  // namespace
+
+std::optional<std::uint32_t> parse_calibration_date(std::string_view t) {
+    if (t.empty()) return 0u;
+    if (t.size() != 10 || t[4] != '-' || t[7] != '-') return std::nullopt;
+    std::uint32_t v[3] = {0, 0, 0};
+    const std::size_t starts[3] = {0, 5, 8}, lens[3] = {4, 2, 2};
+    for (int f = 0; f < 3; ++f) {
+        for (std::size_t i = 0; i < lens[f]; ++i) {
+            const char c = t[starts[f] + i];
+            if (c < '0' || c > '9') return std::nullopt;
+            v[f] = v[f] * 10 + static_cast<std::uint32_t>(c - '0');
+        }
+    }
+    if (!valid_date(v[0], v[1], v[2])) return std::nullopt;
+    return v[0] * 10000 + v[1] * 100 + v[2];
+}
+
+std::string format_calibration_date(std::uint32_t n) {
+    if (n == 0 || !valid_date(n / 10000, n / 100 % 100, n % 100)) return {};
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "%04u-%02u-%02u", n / 10000, n / 100 % 100, n % 100);
+    return buf;
+}
+
 std::optional<IdentifyReply> parse_identify_reply(std::span<const std::uint8_t> body) {
-    if (body.size() != 43) return std::nullopt;
+    // 43 bytes: firmware before the calibration date; 47: with it. Longer: later fields, not read here.
+    if (body.size() != 43 && body.size() < 47) return std::nullopt;
     Reader r{body};
     IdentifyReply m;
     m.protocol_version = r.u8();
@@ -304,7 +341,9 @@ std::optional<IdentifyReply> parse_identify_reply(std::span<const std::uint8_t> 
     m.calibrated_length_nm = r.u32();
     m.resolution_nm = r.u16();
     m.range_nm = r.u32();
+    if (body.size() >= 47) m.calibration_date = r.u32();
     if (m.resolution_nm == 0 || m.calibrated_length_nm == 0) return std::nullopt;
+    if (m.calibration_date != 0 && format_calibration_date(m.calibration_date).empty()) return std::nullopt;
     return m;
 }
 

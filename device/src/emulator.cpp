@@ -123,6 +123,7 @@ void Emulator::handle(const p::FrameView& frame) {
             id.firmware = config_.instrument.firmware.substr(0, 8);
             id.calibrated_length_nm =
                 static_cast<std::uint32_t>(std::llround(config_.instrument.calibrated_length_mm * 1e6));
+            id.calibration_date = p::parse_calibration_date(config_.instrument.calibration_date).value_or(0);
             return reply(buf, p::encode(id, frame.seq, buf));
         }
         case p::MsgType::Status:

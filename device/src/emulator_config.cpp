@@ -52,9 +52,9 @@ analysis::Vec3 vec3(const json& obj, const std::string& where, const char* key, 
 void parse_instrument(const json& j, InstrumentModel& m) {
     const std::string w = "instrument";
     only_keys(j, w,
-              {"model", "serial", "firmware", "calibrated_length_mm", "noise_um", "zero_offset_um", "sample_rate_hz",
-               "averaging", "temp_start_C", "temp_drift_C_per_h", "temp_ripple_C", "temp_ripple_period_s",
-               "battery_start_pct", "battery_drain_pct_per_h", "watchdog_s"});
+              {"model", "serial", "firmware", "calibrated_length_mm", "calibration_date", "noise_um", "zero_offset_um",
+               "sample_rate_hz", "averaging", "temp_start_C", "temp_drift_C_per_h", "temp_ripple_C",
+               "temp_ripple_period_s", "battery_start_pct", "battery_drain_pct_per_h", "watchdog_s"});
     m.model = str(j, w, "model", m.model);
     m.serial = str(j, w, "serial", m.serial);
     m.firmware = str(j, w, "firmware", m.firmware);
@@ -62,6 +62,9 @@ void parse_instrument(const json& j, InstrumentModel& m) {
         fail(w, "model and serial take at most 12 characters, firmware 8");
     }
     m.calibrated_length_mm = num(j, w, "calibrated_length_mm", m.calibrated_length_mm);
+    m.calibration_date = str(j, w, "calibration_date", m.calibration_date);
+    if (!protocol::parse_calibration_date(m.calibration_date))
+        fail(w + ".calibration_date", "must be a date YYYY-MM-DD (or \"\")");
     if (!(m.calibrated_length_mm > 0 && m.calibrated_length_mm < 4000))
         fail(w + ".calibrated_length_mm", "must be in (0, 4000)");
     m.noise_um = num(j, w, "noise_um", m.noise_um);

@@ -46,9 +46,9 @@ void Instrument::protocol_error(const std::string& what) const {
 }
 
 void Instrument::on_stream(const p::FrameView& frame) {
-    // Before StartReply only the new stream's first frames (from 0, in order) count; anything else is
-    // left over from an earlier session (a host that went away without Stop).
-    if (!streaming_ && (!start_pending_ || frame.seq != expected_stream_seq_)) {
+    // Before StartReply the new stream begins at 0; anything before that is left over from an earlier
+    // session (a host that went away without Stop). Once it has begun, replays and gaps count as below.
+    if (!streaming_ && (!start_pending_ || (!have_stream_frame_ && frame.seq != expected_stream_seq_))) {
         ++stats_.stale_frames;
         return;
     }
@@ -57,12 +57,22 @@ void Instrument::on_stream(const p::FrameView& frame) {
         gap_pending_ = true;
         return;
     }
+    // A sequence number in the half of the counter behind the expected one is an old frame (a replay, a
+    // late duplicate) unless the device clock moved on (then > 32 768 frames were lost and it wrapped).
+    const auto behind = static_cast<std::uint16_t>(expected_stream_seq_ - 1u - frame.seq);
+    if (have_stream_frame_ && frame.seq != expected_stream_seq_ && behind < 0x8000u &&
+        frame_.t0_us <= last_stream_t0_us_) {
+        ++stats_.replayed_frames;
+        return;
+    }
     if (frame.seq != expected_stream_seq_) {
         stats_.lost_frames += static_cast<std::uint16_t>(frame.seq - expected_stream_seq_);
         ++stats_.gaps;
         gap_pending_ = true;
     }
     expected_stream_seq_ = static_cast<std::uint16_t>(frame.seq + 1);
+    have_stream_frame_ = true;
+    last_stream_t0_us_ = frame_.t0_us;
     ++stats_.frames;
     const float temp = static_cast<float>(frame_.bar_temp_cC) * 0.01f;
     const std::int32_t step_nm = info_ ? static_cast<std::int32_t>(info_->resolution_um * 1000.0 + 0.5) : 100;
@@ -87,8 +97,11 @@ void Instrument::on_stream(const p::FrameView& frame) {
 
 void Instrument::on_frame(const p::FrameView& frame) {
     if (frame.version != p::kVersion) {
-        protocol_error("the instrument speaks protocol version " + std::to_string(frame.version) +
-                       ", this ballbar speaks version " + std::to_string(p::kVersion));
+        // Its type and body may mean anything: skip it. A stream frame it replaced shows up as a gap in
+        // the sequence numbers; a request answered only in this version fails in request() naming it.
+        ++stats_.unknown_version_frames;
+        stats_.unknown_version = frame.version;
+        return;
     }
     if (frame.type == p::MsgType::Stream) return on_stream(frame);
     if (waiting_seq_ && frame.seq == *waiting_seq_ && !reply_) {
@@ -137,6 +150,7 @@ std::size_t Instrument::poll(milliseconds timeout) {
 }
 
 Instrument::Reply Instrument::request(p::MsgType type, std::span<const std::uint8_t> body) {
+    const std::uint64_t foreign_before = stats_.unknown_version_frames;
     for (int attempt = 0; attempt < options_.attempts; ++attempt) {
         const std::uint16_t seq = next_seq_++;
         p::FrameBuffer buf{};
@@ -144,6 +158,7 @@ Instrument::Reply Instrument::request(p::MsgType type, std::span<const std::uint
         if (type == p::MsgType::Start) {
             // Stream frames may overtake a slow StartReply: count from 0 from now on.
             expected_stream_seq_ = 0;
+            have_stream_frame_ = false;
             gap_pending_ = false;
             start_pending_ = true;
         }
@@ -174,6 +189,11 @@ Instrument::Reply Instrument::request(p::MsgType type, std::span<const std::uint
         }
         return r;
     }
+    if (stats_.unknown_version_frames > foreign_before) {
+        protocol_error("no protocol-version-" + std::to_string(p::kVersion) + " answer to " +
+                       std::string(p::to_string(type)) + "; the instrument sent frames of protocol version " +
+                       std::to_string(stats_.unknown_version) + ", which this ballbar does not speak");
+    }
     throw DeviceError(DeviceErrorKind::Timeout, transport_->uri() + ": no answer to " +
                                                     std::string(p::to_string(type)) + " within " +
                                                     std::to_string(options_.reply_timeout.count()) + " ms (" +
@@ -193,6 +213,7 @@ const InstrumentInfo& Instrument::identify() {
     info.serial = id->serial;
     info.firmware = id->firmware;
     info.calibrated_length_mm = id->calibrated_length_nm * 1e-6;
+    info.calibration_date = p::format_calibration_date(id->calibration_date);
     info.resolution_um = id->resolution_nm * 1e-3;
     info.range_mm = id->range_nm * 1e-6;
     info_ = info;

@@ -50,6 +50,7 @@ json header(const Header& h) {
             {"instrument",
              {{"model", h.instrument_model},
               {"serial", h.instrument_serial},
+              {"firmware", h.instrument_firmware},
               {"calibration_date", h.instrument_calibration_date},
               {"calibrated_length_mm", opt(h.calibrated_length_mm)}}},
             {"operator", h.operator_name},

@@ -47,6 +47,7 @@ void setup_section(Document& doc, const Report& r) {
     kv.emplace_back("Status", or_dash(h.status));
     kv.emplace_back("Instrument", or_dash(h.instrument_model));
     kv.emplace_back("Serial", or_dash(h.instrument_serial));
+    kv.emplace_back("Firmware", or_dash(h.instrument_firmware));
     kv.emplace_back("Calibrated", or_dash(h.instrument_calibration_date));
     kv.emplace_back("Bar length", h.calibrated_length_mm ? fixed(*h.calibrated_length_mm, 4) + " mm" : "–");
     kv.emplace_back("Bar temperature", range_C(h.bar_temp_C));

@@ -77,9 +77,10 @@ void add_ssm(Report& r, std::string_view kind, const json& p) {
                          test >= 0 && step > 0 ? test * 2 + step - 1 : static_cast<int>(r.locations.size()));
     l.label = opt_str(kind, p, "label");
     if (l.label.empty() && test >= 0)
-        l.label = "test " + std::to_string(test) +
-                  (step == 1   ? ", before rotation"
-                   : step == 2 ? ", after rotation"
+        // Numbered as the CLI numbers them (measure's prompts, sessions show): test and step from 1.
+        l.label = "test " + std::to_string(test + 1) +
+                  (step == 1   ? " step 1, before rotation"
+                   : step == 2 ? " step 2, after rotation"
                                : "");
     const auto dv = opt_vec(kind, p, "dV_mm");
     if (!dv) bad(kind, "dV_mm", "is missing");

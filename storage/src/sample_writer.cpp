@@ -42,10 +42,20 @@ SampleWriter::~SampleWriter() {
 
 std::uint64_t SampleWriter::append(const analysis::BarSample& sample) {
     const std::uint64_t seq = next_seq_++;
+    if (segment_due_ || sample.device_time_us < last_device_time_us_) {
+        pending_segments_.push_back({seq, sample.device_time_us, store_.now_iso8601()});
+        segment_due_ = false;
+    }
+    last_device_time_us_ = sample.device_time_us;
+    const auto now = std::chrono::steady_clock::now();
+    if (pending_.empty()) first_pending_at_ = now;
     pending_.push_back(sample);
     const std::uint64_t first_t = pending_.front().device_time_us;
+    // Device time bounds what a batch holds; wall time bounds how long a slow trickle (a stalling
+    // link, a burst after a pause) waits uncommitted.
     const bool time_due = sample.device_time_us < first_t ||  // device clock restarted
-                          sample.device_time_us - first_t >= options_.max_batch_device_time_us;
+                          sample.device_time_us - first_t >= options_.max_batch_device_time_us ||
+                          now - first_pending_at_ >= options_.max_batch_wall_time;
     if (time_due || pending_.size() >= options_.max_batch_samples) flush();
     return seq;
 }
@@ -78,6 +88,7 @@ void SampleWriter::flush() {
                 bind_row(insert_one_, 1, pending_[i], seq++);
                 insert_one_.run();
             }
+            for (const auto& g : pending_segments_) store_.add_sample_segment(session_id_, g);
             tx.commit();
         } catch (const StorageError& e) {
             if (e.kind() == StorageError::Kind::disk_full) {
@@ -92,6 +103,7 @@ void SampleWriter::flush() {
     }
     committed_ += n;
     pending_.clear();
+    pending_segments_.clear();
 }
 
 }  // namespace ballbar::storage

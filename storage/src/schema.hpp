@@ -119,6 +119,18 @@ INSERT INTO session_transitions(session_id, from_state, to_state, event, at, sco
 DELETE FROM results WHERE kind = 'acquisition.transition' AND json_valid(payload_json);
 )sql";
 
-inline constexpr std::array<std::string_view, 2> kMigrations = {kMigrationV1, kMigrationV2};
+// v3: a session's samples in runs on one device clock (a connection; a resume), so readers can build
+// one monotonic session time across reconnects and resumes (SessionClock).
+inline constexpr std::string_view kMigrationV3 = R"sql(
+CREATE TABLE sample_segments (
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  first_seq INTEGER NOT NULL,
+  device_time_us INTEGER NOT NULL,
+  started_at TEXT NOT NULL,
+  PRIMARY KEY (session_id, first_seq)
+) WITHOUT ROWID;
+)sql";
+
+inline constexpr std::array<std::string_view, 3> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3};
 
 }  // namespace ballbar::storage::detail

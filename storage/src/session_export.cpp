@@ -29,6 +29,8 @@ ojson session_header(const SessionInfo& s) {
     j["id"] = s.id;
     j["uuid"] = s.uuid;
     j["state"] = std::string(to_string(s.state));
+    j["state_reason"] = s.reason;
+    j["resumable"] = s.resumable();
     j["source"] = std::string(to_string(s.source));
     j["operator"] = s.operator_name;
     j["procedure"] = s.procedure;

@@ -74,9 +74,10 @@ bool transition_allowed(SessionState from, SessionState to) {
             return to == S::completed || to == S::aborted || to == S::failed || to == S::interrupted;
         case S::interrupted:
             return to == S::running || to == S::completed || to == S::aborted;
+        case S::failed:
+            return to == S::running;  // resumed: what it measured stays, the procedure continues
         case S::completed:
         case S::aborted:
-        case S::failed:
             return false;
     }
     return false;
@@ -107,7 +108,10 @@ Store::Store(const std::string& path, StoreOptions options)
         throw StorageError(Kind::invalid, path + " is an SQLite database but not a ballbar one; not changed");
     }
     schema_version_ = static_cast<int>(version);
-    if (options_.read_only) return;  // an older schema is read as it is (see transitions())
+    if (options_.read_only) {  // an older schema is read as it is (see transitions())
+        if (!is_memory(path)) probe_fd_ = ::open((path + ".lock").c_str(), O_RDONLY | O_CLOEXEC);
+        return;
+    }
 
     if (!is_memory(path)) {
         db_.exec("PRAGMA journal_mode = WAL");
@@ -125,6 +129,7 @@ Store::Store(const std::string& path, StoreOptions options)
 
 Store::~Store() {
     if (lock_fd_ >= 0) ::close(lock_fd_);  // releases every session lock of this Store
+    if (probe_fd_ >= 0) ::close(probe_fd_);
 }
 
 void Store::check_file(const std::string& path) const {
@@ -195,6 +200,20 @@ void Store::unlock_session(std::int64_t id) {
     fl.l_start = static_cast<off_t>(id);
     fl.l_len = 1;
     ::fcntl(lock_fd_, F_OFD_SETLK, &fl);
+}
+
+bool Store::writer_alive(std::int64_t id) {
+    if (std::find(owned_.begin(), owned_.end(), id) != owned_.end()) return true;
+    if (is_memory(path())) return true;  // one process: nobody else can have written it
+    const int fd = lock_fd_ >= 0 ? lock_fd_ : probe_fd_;
+    if (fd < 0) return false;  // no lock file: nobody ever held a session's lock
+    struct flock fl {};
+    fl.l_type = F_RDLCK;  // conflicts with the writer's write lock; needs no write access
+    fl.l_whence = SEEK_SET;
+    fl.l_start = static_cast<off_t>(id);
+    fl.l_len = 1;
+    if (::fcntl(fd, F_OFD_GETLK, &fl) != 0) return true;  // cannot tell: do not call it dead
+    return fl.l_type != F_UNLCK;
 }
 
 void Store::recover_unfinished() {
@@ -316,9 +335,10 @@ void Store::transition(std::int64_t session_id, SessionState to, std::string_vie
     }
     const std::string now = now_iso8601();
     const bool ends = to == SessionState::completed || to == SessionState::aborted || to == SessionState::failed;
-    auto up =
-        db_.prepare("UPDATE sessions SET state = ?, ended_at = CASE WHEN ? THEN ? ELSE ended_at END WHERE id = ?");
-    up.bind(1, to_string(to)).bind(2, ends ? 1 : 0).bind(3, now).bind(4, session_id).run();
+    auto up = db_.prepare(
+        "UPDATE sessions SET state = ?, ended_at = CASE WHEN ? THEN ? WHEN ? THEN NULL ELSE ended_at END WHERE id = ?");
+    up.bind(1, to_string(to)).bind(2, ends ? 1 : 0).bind(3, now).bind(4, to == SessionState::running ? 1 : 0);
+    up.bind(5, session_id).run();
     auto tr = db_.prepare(
         "INSERT INTO session_transitions(session_id, from_state, to_state, event, at) VALUES (?, ?, ?, ?, ?)");
     tr.bind(1, session_id).bind(2, to_string(from)).bind(3, to_string(to)).bind(4, event).bind(5, now).run();
@@ -327,13 +347,30 @@ void Store::transition(std::int64_t session_id, SessionState to, std::string_vie
 }
 
 std::uint64_t Store::resume_session(std::int64_t id) {
-    const SessionState state = state_of(id);
-    if (state != SessionState::interrupted) {
-        throw StorageError(Kind::invalid, "session " + std::to_string(id) + " is " + std::string(to_string(state)) +
-                                              ", only an interrupted session can be resumed");
+    SessionState state = state_of(id);
+    if (state == SessionState::created || state == SessionState::running) {
+        if (writer_alive(id)) {
+            throw StorageError(Kind::invalid, "session " + std::to_string(id) +
+                                                  " is being written by a running process; it cannot be resumed");
+        }
+        transition(id, SessionState::interrupted, "interrupted: its writer is gone");
+        state = SessionState::interrupted;
     }
-    transition(id, SessionState::running, "resume");
+    if (state != SessionState::interrupted && state != SessionState::failed) {
+        throw StorageError(Kind::invalid, "session " + std::to_string(id) + " is " + std::string(to_string(state)) +
+                                              "; only an unfinished (interrupted or failed) session can be resumed");
+    }
+    transition(id, SessionState::running, state == SessionState::failed ? "resume after fail" : "resume");
     return next_seq(id);
+}
+
+void Store::set_instrument(std::int64_t session_id, const Instrument& instrument) {
+    Transaction tx(db_);
+    const std::int64_t instrument_id = upsert_instrument(instrument);
+    auto st = db_.prepare("UPDATE sessions SET instrument_id = ? WHERE id = ?");
+    st.bind(1, instrument_id).bind(2, session_id).run();
+    if (db_.changes() == 0) throw StorageError(Kind::not_found, "no session " + std::to_string(session_id));
+    tx.commit();
 }
 
 void Store::set_notes(std::int64_t session_id, std::string_view notes) {

@@ -60,17 +60,61 @@ std::int64_t to_db(std::uint64_t v) {
 
 }  // namespace
 
+void Store::annotate(SessionInfo& s) {
+    if ((s.state == SessionState::created || s.state == SessionState::running) && !writer_alive(s.id)) {
+        s.state = SessionState::interrupted;
+        s.writer_gone = true;
+        s.reason = "interrupted: its writer is gone (the process ended without finishing it)";
+        return;
+    }
+    auto st = db_.prepare(schema_version_ >= 2 ? "SELECT event FROM session_transitions WHERE session_id = ? AND "
+                                                 "scope = 'session' ORDER BY id DESC LIMIT 1"
+                                               : "SELECT event FROM session_transitions WHERE session_id = ? "
+                                                 "ORDER BY id DESC LIMIT 1");
+    st.bind(1, s.id);
+    if (st.step()) s.reason = st.column_text(0);
+}
+
 SessionInfo Store::session(std::int64_t id) {
-    auto st = db_.prepare(std::string(kSessionSelect) + "WHERE s.id = ?");
-    st.bind(1, id);
-    if (!st.step()) throw StorageError(Kind::not_found, "no session " + std::to_string(id));
-    return read_session(st);
+    SessionInfo s;
+    {
+        auto st = db_.prepare(std::string(kSessionSelect) + "WHERE s.id = ?");
+        st.bind(1, id);
+        if (!st.step()) throw StorageError(Kind::not_found, "no session " + std::to_string(id));
+        s = read_session(st);
+    }
+    annotate(s);
+    return s;
 }
 
 std::vector<SessionInfo> Store::sessions() {
-    auto st = db_.prepare(std::string(kSessionSelect) + "ORDER BY s.id");
     std::vector<SessionInfo> out;
-    while (st.step()) out.push_back(read_session(st));
+    {
+        auto st = db_.prepare(std::string(kSessionSelect) + "ORDER BY s.id");
+        while (st.step()) out.push_back(read_session(st));
+    }
+    for (auto& s : out) annotate(s);
+    return out;
+}
+
+void Store::add_sample_segment(std::int64_t session_id, const SampleSegment& g) {
+    auto st = db_.prepare(
+        "INSERT OR REPLACE INTO sample_segments(session_id, first_seq, device_time_us, started_at) VALUES (?, ?, ?, "
+        "?)");
+    st.bind(1, session_id).bind(2, to_db(g.first_seq)).bind(3, to_db(g.device_time_us));
+    st.bind(4, g.started_at.empty() ? now_iso8601() : g.started_at).run();
+}
+
+std::vector<SampleSegment> Store::sample_segments(std::int64_t session_id) {
+    std::vector<SampleSegment> out;
+    if (schema_version_ < 3) return out;  // an older file opened read-only
+    auto st = db_.prepare(
+        "SELECT first_seq, device_time_us, started_at FROM sample_segments WHERE session_id = ? ORDER BY first_seq");
+    st.bind(1, session_id);
+    while (st.step()) {
+        out.push_back({static_cast<std::uint64_t>(st.column_int(0)), static_cast<std::uint64_t>(st.column_int(1)),
+                       st.column_text(2)});
+    }
     return out;
 }
 

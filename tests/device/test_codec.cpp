@@ -283,3 +283,28 @@ TEST(Decoder, ParseStreamRejectsInconsistentCount) {
     EXPECT_FALSE(parse_stream(r.frame.body.first(r.frame.body.size() - 3), out));
     EXPECT_FALSE(parse_stream(r.frame.body.first(10), out));
 }
+
+TEST(Codec, IdentifyReplyWithAndWithoutCalibrationDate) {
+    IdentifyReply id;
+    id.model = "BB-1E";
+    id.calibrated_length_nm = 100'000'000;
+    id.calibration_date = 20251130;
+    FrameBuffer buf{};
+    Decoder d;
+    std::span<const std::uint8_t> wire{buf.data(), encode(id, 3, buf)};
+    const auto r = d.next(wire);
+    ASSERT_EQ(r.status, DecodeStatus::Frame);
+    ASSERT_EQ(r.frame.body.size(), 47u);
+    const auto back = parse_identify_reply(r.frame.body);
+    ASSERT_TRUE(back);
+    EXPECT_EQ(back->calibration_date, 20251130u);
+    // Firmware from before the date: the 43 bytes up to range_nm.
+    const auto old = parse_identify_reply(r.frame.body.first(43));
+    ASSERT_TRUE(old);
+    EXPECT_EQ(old->calibration_date, 0u);
+    EXPECT_EQ(old->calibrated_length_nm, 100'000'000u);
+    EXPECT_FALSE(parse_identify_reply(r.frame.body.first(45)));
+    std::vector<std::uint8_t> bad(r.frame.body.begin(), r.frame.body.end());
+    bad[46] = 0xFF;  // not a date
+    EXPECT_FALSE(parse_identify_reply(bad));
+}

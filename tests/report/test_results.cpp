@@ -26,7 +26,7 @@ TEST(Results, SsmOfTheAcquisition) {
     EXPECT_NEAR(l.error_um.x(), -7.5, 1e-12);
     EXPECT_NEAR(l.uncertainty_um.z(), 0.005, 1e-12);
     EXPECT_EQ(l.points, 3);
-    EXPECT_EQ(l.label, "test 1, after rotation");
+    EXPECT_EQ(l.label, "test 2 step 2, after rotation");  // "test":1 is the second test
 }
 
 TEST(Results, OrientationGivesTheTypesAngles) {

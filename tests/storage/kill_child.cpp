@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: MIT
 // Helper of the kill test: streams samples into a session until it is killed.
-//   storage_kill_child DB emulator|synthetic [RESUME_SESSION_ID]
+//   storage_kill_child DB emulator|realtime|synthetic [RESUME_SESSION_ID]
 // Writes to stdout (a pipe), as native 8-byte integers: first the session id, then after every
-// SampleWriter::append the number of samples appended so far by this process.
+// SampleWriter::append the number of samples appended so far by this process. `realtime`: the emulator
+// runs on the steady clock (as a real instrument does) and, after the session id, the child writes the
+// CLOCK_MONOTONIC time in µs at which the device clock read 0, so the parent knows how much the
+// instrument had measured when it killed the child.
 #include <unistd.h>
 
 #include <cmath>
@@ -80,13 +83,20 @@ int main(int argc, char** argv) {
         report(static_cast<std::uint64_t>(id));
         storage::SampleWriter writer(store, id);
         std::uint64_t appended = 0;
-        if (std::strcmp(argv[2], "emulator") == 0) {
+        const bool realtime = std::strcmp(argv[2], "realtime") == 0;
+        if (std::strcmp(argv[2], "emulator") == 0 || realtime) {
 #ifdef BALLBAR_HAVE_EMULATOR
             using namespace std::chrono_literals;
             device::EmulatorConfig cfg;
             cfg.seed = 11;
             device::Emulator emu(cfg);
-            device::Instrument inst(std::make_unique<device::PipeTransport>(emu));
+            const auto zero = std::chrono::steady_clock::now() - std::chrono::microseconds(emu.now_us());
+            device::Instrument inst(std::make_unique<device::PipeTransport>(
+                emu, realtime ? device::Pacing::RealTime : device::Pacing::Simulated));
+            if (realtime) {
+                report(static_cast<std::uint64_t>(
+                    std::chrono::duration_cast<std::chrono::microseconds>(zero.time_since_epoch()).count()));
+            }
             inst.identify();
             inst.configure(1000, 1);
             inst.start_streaming();

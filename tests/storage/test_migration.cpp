@@ -47,7 +47,7 @@ TEST(Migration, V1ProcedureStepsMoveIntoTheTransitionsTable) {
     const std::string path = dir.file("v1.db");
     make_v1(path);
     Store store(path);
-    EXPECT_EQ(store.db().query_int("PRAGMA user_version"), 2);
+    EXPECT_EQ(store.db().query_int("PRAGMA user_version"), Store::kSchemaVersion);
     EXPECT_EQ(store.integrity_check(), "ok");
 
     const auto steps = store.procedure_steps(1);

@@ -115,7 +115,7 @@ TEST(Reliability, SigkillDuringAcquisitionLosesAtMostOneBatch) {
     TempDir dir;
     const auto db = dir.file("kill.db");
     std::mt19937 rng(20261121);
-    constexpr std::int64_t kBatch = 101;  // 100 ms at 1 kHz, plus the sample that closes the batch
+    constexpr std::int64_t kBatch = 51;  // 50 ms at 1 kHz, plus the sample that closes the batch
     std::int64_t first_id = 0;
     std::int64_t before_resume = 0;
     for (int round = 0; round < 5; ++round) {
@@ -123,6 +123,13 @@ TEST(Reliability, SigkillDuringAcquisitionLosesAtMostOneBatch) {
         const bool resume = round == 4;
         const auto [id, reported] = run_and_kill(db, rng, resume ? std::to_string(first_id) : std::string());
         if (round == 0) first_id = id;
+        {  // Before anyone recovers it, every reader already sees it interrupted (its writer is gone).
+            StoreOptions ro;
+            ro.read_only = true;
+            Store reader(db, ro);
+            EXPECT_EQ(reader.session(id).state, SessionState::interrupted);
+            EXPECT_TRUE(reader.session(id).writer_gone);
+        }
         Store store(db);
         EXPECT_EQ(store.integrity_check(), "ok");
         const auto info = store.session(id);
@@ -136,6 +143,41 @@ TEST(Reliability, SigkillDuringAcquisitionLosesAtMostOneBatch) {
         EXPECT_GE(stored, static_cast<std::int64_t>(reported) - kBatch) << "lost more than one batch";
         EXPECT_LE(stored, static_cast<std::int64_t>(reported) + 1);
         if (round == 0) before_resume = c.n;
+    }
+}
+
+TEST(Reliability, SigkillLosesAtMost100msOfWhatTheInstrumentMeasured) {
+    if (std::string(STORAGE_KILL_SOURCE) != "emulator") GTEST_SKIP() << "built without the device emulator";
+    TempDir dir;
+    const auto db = dir.file("realtime.db");
+    std::mt19937 rng(1201);
+    std::uniform_int_distribution<int> delay_ms(250, 700);
+    for (int round = 0; round < 3; ++round) {
+        SCOPED_TRACE("round " + std::to_string(round));
+        Child child = spawn({STORAGE_KILL_CHILD, db, "realtime"});
+        while (child.values.size() < 3) {  // id, the device clock's zero, a first sample
+            child.drain(std::chrono::milliseconds(50));
+            int status = 0;
+            ASSERT_NE(::waitpid(child.pid, &status, WNOHANG), child.pid) << "child exited early";
+        }
+        child.drain(std::chrono::milliseconds(delay_ms(rng)));
+        const auto kill_at = std::chrono::steady_clock::now();
+        ::kill(child.pid, SIGKILL);
+        int status = 0;
+        ::waitpid(child.pid, &status, 0);
+        ::close(child.fd);
+        const auto id = static_cast<std::int64_t>(child.values[0]);
+        const auto zero_us = static_cast<std::int64_t>(child.values[1]);
+        const std::int64_t measured_us =
+            std::chrono::duration_cast<std::chrono::microseconds>(kill_at.time_since_epoch()).count() - zero_us;
+        Store store(db);
+        const auto n = store.next_seq(id);
+        ASSERT_GT(n, 100u);
+        const auto last = store.samples(id, n - 1, 1).at(0);
+        const double lost_ms = static_cast<double>(measured_us - static_cast<std::int64_t>(last.device_time_us)) * 1e-3;
+        EXPECT_GE(lost_ms, 0.0);
+        EXPECT_LE(lost_ms, 100.0) << "the instrument had measured " << measured_us << " µs, the last stored "
+                                  << last.device_time_us << " µs";
     }
 }
 

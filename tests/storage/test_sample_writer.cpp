@@ -2,6 +2,8 @@
 // SampleWriter: batching by device time and count, contiguous numbering, exact storage of fields.
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include "ballbar/storage/sample_writer.hpp"
 #include "test_util.hpp"
 
@@ -25,19 +27,33 @@ analysis::BarSample at_us(std::uint64_t t, std::int32_t nm = 0) {
     return s;
 }
 
-TEST(SampleWriter, CommitsWhenABatchSpans100msOfDeviceTime) {
+TEST(SampleWriter, CommitsWhenABatchSpans50msOfDeviceTime) {
     TempDir dir;
     Store store(dir.file("a.db"));
     const auto id = running_session(store);
-    SampleWriter w(store, id);
-    // 1 kHz: samples 0..99 span 99 ms and stay pending; sample 100 (at 100 ms) completes the batch.
-    for (std::uint64_t i = 0; i < 100; ++i) w.append(at_us(i * 1000));
-    EXPECT_EQ(w.pending(), 100u);
+    SampleWriter w(store, id, {50'000, 65'536, std::chrono::hours(1)});
+    // 1 kHz: samples 0..49 span 49 ms and stay pending; sample 50 (at 50 ms) completes the batch.
+    for (std::uint64_t i = 0; i < 50; ++i) w.append(at_us(i * 1000));
+    EXPECT_EQ(w.pending(), 50u);
     EXPECT_EQ(store.sample_count(id), 0);
-    w.append(at_us(100'000));
+    w.append(at_us(50'000));
     EXPECT_EQ(w.pending(), 0u);
-    EXPECT_EQ(store.sample_count(id), 101);
-    EXPECT_EQ(w.committed(), 101u);
+    EXPECT_EQ(store.sample_count(id), 51);
+    EXPECT_EQ(w.committed(), 51u);
+    EXPECT_EQ(SampleWriterOptions{}.max_batch_device_time_us, 50'000u) << "the default";
+}
+
+TEST(SampleWriter, ASlowTrickleIsCommittedAfter50msOfWallTime) {
+    TempDir dir;
+    Store store(dir.file("a.db"));
+    const auto id = running_session(store);
+    SampleWriter w(store, id);  // defaults: 50 ms of device time or 50 ms of waiting
+    w.append(at_us(0));
+    w.append(at_us(1000));
+    EXPECT_EQ(store.sample_count(id), 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(60));  // the link stalls
+    w.append(at_us(2000));
+    EXPECT_EQ(store.sample_count(id), 3) << "the batch's first sample waited 60 ms: committed";
 }
 
 TEST(SampleWriter, CommitsByCountAndRestartedDeviceClock) {

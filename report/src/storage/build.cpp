@@ -13,24 +13,14 @@
 
 #include "ballbar/report/decimate.hpp"
 #include "ballbar/report/results.hpp"
+#include "ballbar/storage/session_clock.hpp"
 
 namespace ballbar::report {
 
 namespace {
 
-/// Seconds since the epoch of an ISO 8601 UTC time "YYYY-MM-DDTHH:MM:SS[.fff][Z]"; NaN if not one.
 double parse_iso8601(const std::string& s) {
-    std::tm tm{};
-    int consumed = 0;
-    if (std::sscanf(s.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour,
-                    &tm.tm_min, &tm.tm_sec, &consumed) != 6)
-        return std::nan("");
-    tm.tm_year -= 1900;
-    tm.tm_mon -= 1;
-    double frac = 0;
-    if (static_cast<std::size_t>(consumed) < s.size() && s[static_cast<std::size_t>(consumed)] == '.')
-        frac = std::atof(("0" + s.substr(static_cast<std::size_t>(consumed))).c_str());
-    return static_cast<double>(timegm(&tm)) + frac;
+    return storage::iso8601_seconds(s);
 }
 
 void add_temperature(Range& r, double v, double& sum, std::size_t& n) {
@@ -67,6 +57,7 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
     if (info.instrument) {
         h.instrument_model = info.instrument->model;
         h.instrument_serial = info.instrument->serial;
+        h.instrument_firmware = info.instrument->firmware;
         h.instrument_calibration_date = info.instrument->calibration_date;
         h.calibrated_length_mm = info.instrument->calibrated_length_mm;
     }
@@ -91,16 +82,16 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
     double sum_bar = 0, sum_machine = 0, sum_air = 0;
     std::size_t n_bar = 0, n_machine = 0, n_air = 0;
     if (count > 0) {
-        const auto first = store.samples(session_id, 0, 1);
-        const auto last = store.samples(session_id, count - 1, 1);
-        if (!first.empty() && !last.empty()) {
-            const std::uint64_t t0_us = first.front().device_time_us;
-            const double span_s = static_cast<double>(last.front().device_time_us - t0_us) * 1e-6;
-            MinMaxDecimator dec(0, std::max(span_s, 1e-6), std::max<std::size_t>(1, options.trace_columns));
+        // One monotonic session time across reconnects and resumes (the device clock restarts).
+        const storage::SessionClock clock(store, session_id);
+        {
+            const double t_first = clock.first_s(), t_last = clock.last_s();
+            MinMaxDecimator dec(t_first, std::max(t_last, t_first + 1e-6),
+                                std::max<std::size_t>(1, options.trace_columns));
             double lo = std::numeric_limits<double>::infinity(), hi = -lo;
             std::size_t next_wanted = 0;
             store.for_each_sample(session_id, [&](const analysis::BarSample& s) {
-                const double t = static_cast<double>(s.device_time_us - t0_us) * 1e-6;
+                const double t = clock.seconds(s.seq, s.device_time_us);
                 const double um = s.displacement_nm * 1e-3;
                 dec.add(t, um);
                 lo = std::min(lo, um);

@@ -28,8 +28,9 @@ struct InstrumentModel {
     std::string serial = "EMU00001";
     std::string firmware = "1.0.0";
     double calibrated_length_mm = 150.0;
-    double noise_um = 0.25;        ///< transducer noise (1 σ) of one reading, before averaging
-    double zero_offset_um = 23.7;  ///< transducer zero error until SetReference
+    std::string calibration_date = "2026-01-15";  ///< of the length calibration (IdentifyReply); "" = not told
+    double noise_um = 0.25;                       ///< transducer noise (1 σ) of one reading, before averaging
+    double zero_offset_um = 23.7;                 ///< transducer zero error until SetReference
     std::uint16_t sample_rate_hz = 1000;
     std::uint8_t averaging = 1;
     double temp_start_C = 20.3;

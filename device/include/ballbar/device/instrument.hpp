@@ -2,7 +2,9 @@
 // The instrument driver: protocol v1 over any Transport. Requests (identify, status, configure, set
 // reference, start/stop, heartbeat) with timeouts and retries; stream frames decoded into a bounded,
 // preallocated sample queue. Lost frames are counted from the stream sequence numbers and the first
-// sample after any loss carries kSampleAfterGap: a gap is never papered over.
+// sample after any loss carries kSampleAfterGap: a gap is never papered over. A frame that comes again
+// (an older sequence number, device time not newer than what was accepted) is skipped and counted as
+// replayed, never stored twice; a frame of another protocol version is skipped and counted.
 //
 // Threading: one thread calls the Instrument (requests and poll()); SampleQueue is single-producer /
 // single-consumer, so another thread may drain it with pop().
@@ -31,6 +33,7 @@ struct InstrumentInfo {
     int protocol_version = 0;
     std::string model, serial, firmware;
     double calibrated_length_mm = 0;
+    std::string calibration_date;  ///< ISO 8601 date of the length calibration; empty = not told
     double resolution_um = 0;
     double range_mm = 0;
 };
@@ -47,14 +50,17 @@ struct InstrumentStatus {
 };
 
 struct StreamStats {
-    std::uint64_t frames = 0;          ///< stream frames accepted
-    std::uint64_t samples = 0;         ///< samples queued
-    std::uint64_t lost_frames = 0;     ///< from sequence-number gaps
-    std::uint64_t gaps = 0;            ///< how many times a gap was seen
-    std::uint64_t queue_drops = 0;     ///< samples lost because the queue was full
-    std::uint64_t invalid_frames = 0;  ///< rejected by the decoder (CRC, framing)
-    std::uint64_t stale_replies = 0;   ///< replies to requests we no longer wait for
-    std::uint64_t stale_frames = 0;    ///< stream frames of an earlier session, before StartReply
+    std::uint64_t frames = 0;           ///< stream frames accepted
+    std::uint64_t samples = 0;          ///< samples queued
+    std::uint64_t lost_frames = 0;      ///< from sequence-number gaps
+    std::uint64_t gaps = 0;             ///< how many times a gap was seen
+    std::uint64_t queue_drops = 0;      ///< samples lost because the queue was full
+    std::uint64_t invalid_frames = 0;   ///< rejected by the decoder (CRC, framing)
+    std::uint64_t stale_replies = 0;    ///< replies to requests we no longer wait for
+    std::uint64_t stale_frames = 0;     ///< stream frames of an earlier session, before StartReply
+    std::uint64_t replayed_frames = 0;  ///< stream frames seen again (an older seq, no newer device time): skipped
+    std::uint64_t unknown_version_frames = 0;  ///< frames of another protocol version: skipped
+    int unknown_version = 0;                   ///< the version of the last of them
 };
 
 /// Bounded single-producer/single-consumer ring of samples, allocated once.
@@ -134,6 +140,8 @@ class Instrument {
     bool streaming_ = false;
     bool start_pending_ = false;
     std::uint16_t expected_stream_seq_ = 0;
+    bool have_stream_frame_ = false;       ///< a frame of the current stream was accepted
+    std::uint64_t last_stream_t0_us_ = 0;  ///< its t0
     bool gap_pending_ = false;
     std::uint64_t host_seq_ = 0;
     std::uint32_t heartbeat_token_ = 0;

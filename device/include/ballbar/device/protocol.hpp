@@ -91,7 +91,14 @@ struct IdentifyReply {
     std::uint32_t calibrated_length_nm = 0;
     std::uint16_t resolution_nm = kResolutionNm;
     std::uint32_t range_nm = 1'000'000;
+    /// Date of the bar's length calibration as the decimal number YYYYMMDD (20260115); 0 = unknown.
+    /// Sent after range_nm (47-byte body); a 43-byte reply (firmware before it) parses with 0.
+    std::uint32_t calibration_date = 0;
 };
+
+/// "2026-01-15" ⇄ 20260115. nullopt / "" for a text or number that is not a calendar date (0 ⇄ "").
+std::optional<std::uint32_t> parse_calibration_date(std::string_view iso_date);
+std::string format_calibration_date(std::uint32_t yyyymmdd);
 
 struct StatusReply {
     std::uint8_t battery_pct = 100;

@@ -39,7 +39,7 @@ struct Header {
     std::string started_at;   ///< ISO 8601
     std::string finished_at;  ///< ISO 8601; empty while running or when unknown
     analysis::MachineGeometry machine;
-    std::string instrument_model, instrument_serial, instrument_calibration_date;
+    std::string instrument_model, instrument_serial, instrument_firmware, instrument_calibration_date;
     std::optional<double> calibrated_length_mm;
     std::string operator_name;
     Range bar_temp_C, machine_temp_C, air_temp_C;

@@ -32,7 +32,8 @@ std::optional<SessionSource> parse_session_source(std::string_view text);
 
 /// Lifecycle of a session. `created` → `running` → `completed` | `aborted` | `failed`; a session found
 /// unfinished (created/running) with no live owner when a Store opens becomes `interrupted`, from which it
-/// can be resumed (→ `running`), completed with what it has, or aborted.
+/// can be resumed (→ `running`), completed with what it has, or aborted. A `failed` session can be
+/// resumed too (→ `running`): what it measured stays and the procedure continues after it.
 enum class SessionState { created, running, completed, aborted, failed, interrupted };
 std::string_view to_string(SessionState state);
 std::optional<SessionState> parse_session_state(std::string_view text);
@@ -77,6 +78,23 @@ struct SessionInfo {
     std::string metadata_json;
     std::int64_t sample_count = 0;
     std::int64_t point_count = 0;
+    /// Why it is in its state: the event of the transition into it ("fail: no samples for 30 s",
+    /// "interrupted: found unfinished on open", …), or, for a session stored as created/running whose
+    /// writer is gone (killed, crashed), "interrupted: its writer is gone" — `state` is then
+    /// `interrupted` for every reader, even one that does not write (recover = false, read_only).
+    std::string reason;
+    bool writer_gone = false;  ///< stored as created/running, but no live process holds its lock
+    /// interrupted or failed: `ballbar measure --resume` continues it.
+    bool resumable() const { return state == SessionState::interrupted || state == SessionState::failed; }
+};
+
+/// A run of a session's samples on one device clock: a connection, or the same one after a resume. The
+/// writer records one when it starts and whenever the device clock goes back (a replug that restarted
+/// the instrument); SessionClock (session_clock.hpp) turns them into one monotonic session time.
+struct SampleSegment {
+    std::uint64_t first_seq = 0;
+    std::uint64_t device_time_us = 0;  ///< of its first sample
+    std::string started_at;            ///< the Store's clock when the writer took that sample (ISO 8601)
 };
 
 /// One entry of a session's audit trail.
@@ -145,7 +163,7 @@ struct StoreOptions {
 
 class Store {
   public:
-    static constexpr int kSchemaVersion = 2;
+    static constexpr int kSchemaVersion = 3;
     static constexpr std::int64_t kApplicationId = 0x42424152;  // "BBAR"
 
     /// Opens or creates the database at `path` and migrates it to kSchemaVersion. Throws StorageError:
@@ -173,8 +191,14 @@ class Store {
     void finish_session(std::int64_t id) { transition(id, SessionState::completed, "finish"); }
     void abort_session(std::int64_t id, std::string_view why = "abort") { transition(id, SessionState::aborted, why); }
     void fail_session(std::int64_t id, std::string_view why) { transition(id, SessionState::failed, why); }
-    /// Resumes an `interrupted` session (→ `running`); returns the seq the next sample gets.
+    /// Resumes an unfinished session (→ `running`): `interrupted`, `failed`, or stored as created/running
+    /// with its writer gone (recorded as interrupted first). Returns the seq the next sample gets. Throws
+    /// Kind::invalid for a completed or aborted session, or one a live process is writing.
     std::uint64_t resume_session(std::int64_t id);
+    /// Records (or replaces) the instrument a session is measured with, e.g. once it has identified.
+    void set_instrument(std::int64_t session_id, const Instrument& instrument);
+    /// Whether a live process (this Store or another) holds the session's lock: it is being written.
+    bool writer_alive(std::int64_t session_id);
     SessionInfo session(std::int64_t id);
     std::vector<SessionInfo> sessions();
     /// A session by numeric id or by a unique prefix of its uuid. Throws Kind::not_found / Kind::invalid.
@@ -197,6 +221,10 @@ class Store {
     /// Samples with seq in [from_seq, from_seq + limit), in order.
     std::vector<analysis::BarSample> samples(std::int64_t session_id, std::uint64_t from_seq = 0,
                                              std::size_t limit = SIZE_MAX);
+    /// Records where a run of samples on one device clock begins (SampleWriter does).
+    void add_sample_segment(std::int64_t session_id, const SampleSegment& segment);
+    /// The session's segments in seq order; empty for sessions stored before schema v3 (and imported ones).
+    std::vector<SampleSegment> sample_segments(std::int64_t session_id);
     /// Calls `fn` for every sample in order, without holding them all in memory.
     void for_each_sample(std::int64_t session_id, const std::function<void(const analysis::BarSample&)>& fn);
 
@@ -229,10 +257,12 @@ class Store {
     std::string new_uuid();
     SessionState state_of(std::int64_t session_id);
     ModelRecord read_model(Statement& st);
+    void annotate(SessionInfo& s);
 
     StoreOptions options_;
     Database db_;
     int lock_fd_ = -1;
+    int probe_fd_ = -1;                    ///< the lock file opened read-only, for liveness checks of a read-only Store
     int schema_version_ = kSchemaVersion;  // of the file: older only when opened read-only
     std::vector<std::int64_t> owned_;
     std::vector<std::int64_t> recovered_;
