@@ -24,6 +24,7 @@
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
+#include "gauge_source.hpp"  // demo --instrument: a digital gauge (issue 14)
 #if __has_include("ballbar/report/build.hpp")
 #include "ballbar/report/build.hpp"
 #define BALLBAR_HAVE_REPORT 1
@@ -45,7 +46,9 @@ struct DemoOptions {
     std::uint64_t seed = 1;
     bool json = false;
     bool compensate = false;
-    std::string report;  ///< --report PATH: write the session's PDF report
+    std::string report;      ///< --report PATH: write the session's PDF report
+    std::string instrument;  ///< --instrument KIND: a digital gauge instead of the ballbar (gauge_demo.cpp)
+    double gauge_rate_hz = 20;
 };
 
 /// Answers every question with yes and drives the emulator's machine when the program should run.
@@ -150,6 +153,8 @@ std::string arcsec(const json& angles, const json& std = nullptr) {
 }
 
 int run_demo(const DemoOptions& o, const Globals& globals) {
+    if (!o.instrument.empty() && o.instrument != "ballbar")
+        return run_gauge_demo({o.instrument, o.machine, o.seed, o.gauge_rate_hz, o.json}, resolve_db_path(globals));
     const auto type = ba::parse_machine_type(o.machine);
     if (!type) throw CliError(kExitUsage, "--machine must be RRTTT, TTTRR or RTTTR");
     const acq::MachineFile machine = acq::seed_machine(*type);
@@ -330,6 +335,10 @@ BALLBAR_COMMAND(demo) {
     sub->add_flag("--json", o->json, "Print the comparison as JSON");
     sub->add_option("--report", o->report, "Also write the session's PDF report to this file");
     sub->add_flag("--compensate", o->compensate, "Then identify the errors and show the compensation");
+    sub->add_option("--instrument", o->instrument, "ballbar (default) or a digital gauge on the bar")
+        ->check(CLI::IsMember({"ballbar", "sylvac", "mitutoyo-itn", "digimatic", "modbus"}));
+    sub->add_option("--rate", o->gauge_rate_hz, "The gauge's readings per second (--instrument)")
+        ->check(CLI::Range(5.0, 1000.0));
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });
 }
 

@@ -11,6 +11,7 @@
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "command.hpp"
+#include "gauge_source.hpp"
 #include "interrupt.hpp"
 
 namespace {
@@ -24,12 +25,19 @@ struct EmulateOptions {
     std::string link;
     std::optional<double> watchdog_s;
     bool verbose = false;
+    std::string instrument;  ///< a gauge kind (gauge_commands.cpp)
+    std::string faults;
+    double rate_hz = 20;
 };
 
 int run_emulate(const EmulateOptions& o) {
     using namespace ballbar;
     using ballbar::app::CliError;
     if (o.pty == (o.tcp_port >= 0)) throw CliError(app::kExitUsage, "give exactly one of --pty and --tcp PORT");
+    if (!o.instrument.empty() && o.instrument != "ballbar") {
+        if (!o.pty) throw CliError(app::kExitUsage, "--instrument " + o.instrument + " is served on --pty only");
+        return app::run_gauge_emulate(o.instrument, o.faults, o.seed.value_or(1), o.rate_hz);
+    }
     device::EmulatorConfig cfg;
     if (!o.config.empty()) {
         try {
@@ -87,5 +95,11 @@ BALLBAR_COMMAND(emulate) {
     sub->add_option("--watchdog", o->watchdog_s,
                     "Stop streaming after this many seconds without the host (default 5, 0 = never)");
     sub->add_flag("-v,--verbose", o->verbose, "Log connections to stderr");
+    sub->add_option("--instrument", o->instrument,
+                    "ballbar (default), or a serial gauge: sylvac, digimatic, modbus (docs/instruments.md)")
+        ->check(CLI::IsMember({"ballbar", "sylvac", "digimatic", "modbus", "mitutoyo-itn"}));
+    sub->add_option("--faults", o->faults,
+                    "Gauge faults: not-ready=P,out-of-range=P,no-reply=P,cut-off=P,inch,low-battery");
+    sub->add_option("--rate", o->rate_hz, "Gauge readings per second")->check(CLI::Range(1.0, 1000.0));
     sub->callback([&globals, o] { globals.action = [o]() -> int { return run_emulate(*o); }; });
 }

@@ -16,6 +16,7 @@
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
+#include "gauge_source.hpp"
 #include "interrupt.hpp"
 
 namespace ballbar::app {
@@ -184,7 +185,8 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     const InterruptGuard interrupt;  // Ctrl-C: stop, store, stay resumable, exit 3
     acq::SessionOptions options;
     options.stop = InterruptGuard::flag();
-    acq::Session session(plan, source, sink, *op, options);
+    const auto gauge = make_gauge_source(uri, plan.spec.bar_length_mm);  // a digital gauge (gauge_source.hpp)
+    acq::Session session(plan, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, *op, options);
     session.restore(done);
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);

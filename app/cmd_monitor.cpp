@@ -12,9 +12,11 @@
 #include <optional>
 #include <vector>
 
+#include "ballbar/device/gauge.hpp"
 #include "ballbar/device/instrument.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
+#include "gauge_source.hpp"
 #include "interrupt.hpp"
 
 namespace {
@@ -52,6 +54,8 @@ int run_monitor(const MonitorOptions& o) {
     using namespace ballbar;
     using app::CliError;
     using namespace std::chrono;
+    if (device::gauge::is_gauge_uri(o.device))  // a digital gauge (docs/instruments.md)
+        return app::run_gauge_monitor(o.device, o.seconds, o.json, o.rate_hz.value_or(20));
     const app::InterruptGuard interrupt;  // Ctrl-C ends the monitoring with a summary and exit 3
     std::signal(SIGPIPE, SIG_IGN);
 
@@ -146,8 +150,10 @@ int run_monitor(const MonitorOptions& o) {
 BALLBAR_COMMAND(monitor) {
     auto* sub = root.add_subcommand("monitor", "Connect to an instrument and show its live reading");
     auto o = std::make_shared<MonitorOptions>();
-    sub->add_option("--device", o->device,
-                    "emulator:[CONFIG], serial:PATH, tcp:HOST:PORT, usb:VID:PID[:SERIAL], hid:VID:PID[:SERIAL]")
+    sub->add_option(
+           "--device", o->device,
+           "emulator:[CONFIG], serial:PATH, tcp:HOST:PORT, usb:VID:PID[:SERIAL], hid:VID:PID[:SERIAL]; gauges: "
+           "sylvac:PATH, mitutoyo-itn:[SERIAL], digimatic:PATH, modbus:PATH[?slave=N&baud=B]")
         ->required();
     sub->add_option("--seconds", o->seconds, "Stream this long, then print the summary (default: until Ctrl-C)")
         ->check(CLI::NonNegativeNumber);

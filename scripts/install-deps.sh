@@ -12,6 +12,7 @@ packages=(
   libusb-1.0-0-dev     # device: vendor-class USB bulk link
   libhidapi-dev        # device: USB HID link (hidraw backend)
   libserialport-dev    # device: USB CDC serial link (port enumeration with VID/PID, modem lines)
+  libmodbus-dev        # device: Modbus RTU digital indicators (modbus: URIs, docs/instruments.md)
   libcli11-dev         # app: command line parsing
   nlohmann-json3-dev   # app/storage: JSON in and out (solve, export, --json)
   libfmt-dev           # app: output formatting

@@ -149,6 +149,7 @@ Enumeration enumerate_instruments() {
     enumerate_serial(e);
     enumerate_usb(e);
     enumerate_hid(e);
+    enumerate_gauges(e);
     return e;
 }
 

@@ -67,6 +67,8 @@ class TermiosTransport final : public FdTransport {
 
 speed_t termios_speed(int baud) {
     switch (baud) {
+        case 4800:
+            return B4800;
         case 9600:
             return B9600;
         case 19200:
@@ -97,7 +99,8 @@ bool is_pseudo_terminal(const std::string& path) {
     return maj >= 136 && maj <= 143;
 }
 
-std::unique_ptr<Transport> open_libserialport_transport(const std::string& path, int baud) {
+std::unique_ptr<Transport> open_libserialport_format(const std::string& path, const SerialFormat& f) {
+    const int baud = f.baud;
     sp_port* port = nullptr;
     if (sp_get_port_by_name(path.c_str(), &port) != SP_OK) {
         const int err = sp_last_error_code();
@@ -114,8 +117,11 @@ std::unique_ptr<Transport> open_libserialport_transport(const std::string& path,
         sp_free_port(port);
         open_failed(path, err, detail);
     }
-    const bool ok = sp_set_baudrate(port, baud) == SP_OK && sp_set_bits(port, 8) == SP_OK &&
-                    sp_set_parity(port, SP_PARITY_NONE) == SP_OK && sp_set_stopbits(port, 1) == SP_OK &&
+    const bool ok = sp_set_baudrate(port, baud) == SP_OK && sp_set_bits(port, f.data_bits) == SP_OK &&
+                    sp_set_parity(port, f.parity == 'E'   ? SP_PARITY_EVEN
+                                        : f.parity == 'O' ? SP_PARITY_ODD
+                                                          : SP_PARITY_NONE) == SP_OK &&
+                    sp_set_stopbits(port, f.stop_bits) == SP_OK &&
                     sp_set_flowcontrol(port, SP_FLOWCONTROL_NONE) == SP_OK && sp_set_dtr(port, SP_DTR_ON) == SP_OK;
     int fd = -1;
     if (!ok || sp_get_port_handle(port, &fd) != SP_OK || fd < 0) {
@@ -130,7 +136,8 @@ std::unique_ptr<Transport> open_libserialport_transport(const std::string& path,
     return std::make_unique<SpTransport>(port, fd, path);
 }
 
-std::unique_ptr<Transport> open_termios_transport(const std::string& path, int baud) {
+std::unique_ptr<Transport> open_termios_format(const std::string& path, const SerialFormat& f) {
+    const int baud = f.baud;
     const int fd = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
         const int err = errno;
@@ -144,7 +151,10 @@ std::unique_ptr<Transport> open_termios_transport(const std::string& path, int b
     }
     ::cfmakeraw(&t);
     t.c_cflag |= CLOCAL | CREAD;
-    t.c_cflag &= ~static_cast<tcflag_t>(CRTSCTS);
+    t.c_cflag &= ~static_cast<tcflag_t>(CRTSCTS | CSIZE | PARENB | PARODD | CSTOPB);
+    t.c_cflag |= f.data_bits == 7 ? CS7 : CS8;
+    if (f.parity != 'N') t.c_cflag |= PARENB | (f.parity == 'O' ? PARODD : 0);
+    if (f.stop_bits == 2) t.c_cflag |= CSTOPB;
     ::cfsetispeed(&t, termios_speed(baud));
     ::cfsetospeed(&t, termios_speed(baud));
     if (::tcsetattr(fd, TCSANOW, &t) != 0) {
@@ -156,15 +166,27 @@ std::unique_ptr<Transport> open_termios_transport(const std::string& path, int b
     return std::make_unique<TermiosTransport>(fd, path);
 }
 
+std::unique_ptr<Transport> open_libserialport_transport(const std::string& path, int baud) {
+    return open_libserialport_format(path, SerialFormat{baud, 8, 'N', 1});
+}
+
+std::unique_ptr<Transport> open_termios_transport(const std::string& path, int baud) {
+    return open_termios_format(path, SerialFormat{baud, 8, 'N', 1});
+}
+
 std::unique_ptr<Transport> open_serial_transport(const std::string& path, int baud) {
+    return open_serial_transport(path, SerialFormat{baud, 8, 'N', 1});
+}
+
+std::unique_ptr<Transport> open_serial_transport(const std::string& path, const SerialFormat& format) {
     try {
-        return open_libserialport_transport(path, baud);
+        return open_libserialport_format(path, format);
     } catch (const DeviceError&) {
         // libserialport refuses bare pseudo-terminals (it looks the port up in sysfs, which has no entry
         // for a pty, and wants modem lines): use termios for those, and only for those.
         if (!is_pseudo_terminal(path)) throw;
     }
-    return open_termios_transport(path, baud);
+    return open_termios_format(path, format);
 }
 
 }  // namespace ballbar::device

@@ -148,7 +148,53 @@ TEST(UdevRules, RulesFilesSortBeforeSeatLate) {
             EXPECT_LT(e.path().filename().string(), "73-seat-late.rules") << e.path();
         }
     }
-    EXPECT_EQ(files, 2);
+    EXPECT_EQ(files, 4);  // the instrument's rules and the gauges', each in both variants
+}
+
+std::string read_text(const std::string& path) {
+    std::ifstream in(path);
+    EXPECT_TRUE(in) << "cannot read " << path;
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+TEST(UdevRules, GaugeRulesAreGeneratedFromTheGaugeIdTable) {
+    // The committed files are exactly what the table gives (regenerate: ballbar udev-rules [--plugdev]).
+    for (const bool plugdev : {false, true}) {
+        const std::string path =
+            std::string(BALLBAR_UDEV_DIR) + (plugdev ? "/plugdev" : "") + "/70-ballbar-gauges.rules";
+        EXPECT_EQ(read_text(path), gauge_udev_rules(plugdev))
+            << path << " is stale: run `ballbar udev-rules" << (plugdev ? " --plugdev" : "") << " > " << path << "`";
+        const auto rules = parse_rules(path);
+        ASSERT_EQ(rules.size(), gauge_usb_ids().size()) << path;
+        for (const GaugeUsbId& id : gauge_usb_ids()) {
+            const Rule* found = nullptr;
+            for (const Rule& r : rules)
+                if (r.get("SUBSYSTEM") == id.subsystem && id_of(r, "idVendor") == hex4(id.vid) &&
+                    id_of(r, "idProduct") == hex4(id.pid))
+                    found = &r;
+            ASSERT_NE(found, nullptr) << path << ": no rule for " << hex4(id.vid) << ":" << hex4(id.pid);
+            if (plugdev) {
+                EXPECT_TRUE(found->has("MODE", "=", "0660"));
+                EXPECT_TRUE(found->has("GROUP", "=", "plugdev"));
+            } else {
+                EXPECT_TRUE(found->has("TAG", "+=", "uaccess"));
+                EXPECT_EQ(found->keys.count("MODE"), 0U);
+            }
+            EXPECT_EQ(found->keys.count("OWNER"), 0U);
+        }
+    }
+}
+
+TEST(UsbIds, GaugeTableHasTheItnAndNoneOfOurs) {
+    const auto itn = find_gauge_usb_id(0x0fe7, 0x4001);
+    ASSERT_TRUE(itn.has_value());
+    EXPECT_STREQ(itn->scheme, "mitutoyo-itn");
+    for (const GaugeUsbId& g : gauge_usb_ids()) {
+        EXPECT_FALSE(find_usb_id(g.vid, g.pid).has_value()) << "a gauge ID in the instrument table";
+        EXPECT_TRUE(std::string(g.subsystem) == "usb" || std::string(g.subsystem) == "tty");
+    }
 }
 
 TEST(UsbIds, TableIsConsistent) {

@@ -34,5 +34,7 @@ Enumeration enumerate_instruments();
 void enumerate_serial(Enumeration& out);
 void enumerate_usb(Enumeration& out);
 void enumerate_hid(Enumeration& out);
+/// The gauge cables of gauge_usb_ids() (URIs mitutoyo-itn:SERIAL, ...).
+void enumerate_gauges(Enumeration& out);
 
 }  // namespace ballbar::device

@@ -45,6 +45,25 @@ std::optional<UsbId> find_usb_id(std::uint16_t vid, std::uint16_t pid);
 /// The table entry for `link` (there is exactly one per link).
 UsbId usb_id_for(UsbLink link);
 
+/// A gauge cable we drive (docs/instruments.md), with the URI scheme that opens it and the udev
+/// subsystem of the node the driver opens ("usb": libusb's /dev/bus/usb node, "tty": a serial port).
+struct GaugeUsbId {
+    std::uint16_t vid;
+    std::uint16_t pid;
+    const char* scheme;     ///< "mitutoyo-itn", ...
+    const char* subsystem;  ///< "usb" or "tty"
+    const char* model;
+};
+
+/// Every gauge cable with a USB ID of its own. Enumeration (`ballbar devices`) and the gauge udev rules
+/// (udev/70-ballbar-gauges.rules, written by gauge_udev_rules() and checked by tests/device_usb) use it.
+/// Adaptors on generic USB-serial bridges are not in it: they are opened by their port path.
+std::span<const GaugeUsbId> gauge_usb_ids();
+std::optional<GaugeUsbId> find_gauge_usb_id(std::uint16_t vid, std::uint16_t pid);
+
+/// The text of udev/70-ballbar-gauges.rules (`plugdev`: the udev/plugdev/ variant), from gauge_usb_ids().
+std::string gauge_udev_rules(bool plugdev);
+
 /// Four lower-case hex digits, as in udev rules and URIs: 0x1209 -> "1209", 0xB0B0 -> "b0b0".
 std::string hex4(std::uint16_t value);
 

@@ -23,6 +23,20 @@ std::unique_ptr<Transport> open_serial_transport(const std::string& path, int ba
 std::unique_ptr<Transport> open_libserialport_transport(const std::string& path, int baud = 115200);
 std::unique_ptr<Transport> open_termios_transport(const std::string& path, int baud = 115200);
 
+/// Character format of a serial line: baud, data bits (7 or 8), parity ('N', 'E', 'O'), stop bits (1 or 2).
+struct SerialFormat {
+    int baud = 115200;
+    int data_bits = 8;
+    char parity = 'N';
+    int stop_bits = 1;
+};
+
+/// As above, with another character format (the gauges: Sylvac 4800 7E2, docs/instruments.md).
+std::unique_ptr<Transport> open_serial_transport(const std::string& path, const SerialFormat& format);
+
+std::unique_ptr<Transport> open_libserialport_format(const std::string& path, const SerialFormat& format);
+std::unique_ptr<Transport> open_termios_format(const std::string& path, const SerialFormat& format);
+
 /// True when `path` is a Unix 98 pseudo-terminal slave (major 136–143).
 bool is_pseudo_terminal(const std::string& path);
 

@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: MIT
+// A bar built on a digital gauge as the acquisition's SampleSource (docs/instruments.md): the gauge is
+// polled at its rate, each reading becomes a sample; the zero is set in the calibrator; the measured
+// reading rate and resolution and the gauge's identity go with the session (instrument_json()).
+// Also the gauge paths of `monitor`, `emulate --instrument` and `demo --instrument` (gauge_commands.cpp,
+// gauge_demo.cpp).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "ballbar/acquisition/interfaces.hpp"
+#include "ballbar/device/gauge.hpp"
+
+namespace ballbar::app {
+
+class GaugeSource : public acquisition::SampleSource {
+  public:
+    using Opener = std::function<std::unique_ptr<device::gauge::Gauge>()>;
+    GaugeSource(Opener open, device::gauge::BarOnGauge bar, device::gauge::GaugeSampler::Clock clock = {});
+
+    acquisition::InstrumentStatus connect() override;
+    void set_reference() override;
+    void start() override {}
+    acquisition::ReadStatus read(std::span<analysis::BarSample> out, std::size_t& n,
+                                 std::chrono::milliseconds timeout) override;
+    bool reconnect(std::chrono::milliseconds timeout) override;
+
+    /// Identity, measured resolution and reading rate, bar set-up and reading statistics, as JSON.
+    std::string instrument_json() const;
+    const std::optional<device::gauge::Identity>& identity() const { return identity_; }
+    const device::gauge::SamplerStats& stats() const;
+
+  private:
+    acquisition::InstrumentStatus open_and_measure();
+
+    Opener open_;
+    device::gauge::BarOnGauge bar_;
+    device::gauge::GaugeSampler::Clock clock_;
+    std::unique_ptr<device::gauge::GaugeSampler> sampler_;
+    std::optional<device::gauge::Identity> identity_;
+    std::optional<double> zero_mm_;  ///< kept across reconnects: the gauge's origin is mechanical
+    std::string uri_;
+    std::uint64_t next_seq_ = 0;
+    device::gauge::SamplerStats last_stats_;
+};
+
+/// For `measure --device URI`: a GaugeSource on a bar of `calibrated_length_mm` (the URI's sign= and
+/// rate= applied), or null when `uri` is not a gauge's.
+std::unique_ptr<acquisition::SampleSource> make_gauge_source(const std::string& uri, double calibrated_length_mm);
+
+/// `ballbar demo --instrument KIND`: the SSM procedure on the emulated gauge sitting on the simulated
+/// machine; prints measured vs true errors like the plain demo. `db_path` as resolve_db_path gives it.
+struct GaugeDemoOptions {
+    std::string instrument;
+    std::string machine = "TTTRR";
+    std::uint64_t seed = 1;
+    double rate_hz = 20;
+    bool json = false;
+};
+int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path);
+
+/// `ballbar monitor --device GAUGE-URI`: live readings of a gauge, a summary at the end.
+int run_gauge_monitor(const std::string& uri, double seconds, bool json, double rate_hz);
+
+/// `ballbar emulate --instrument KIND --pty`: a serial gauge emulator on a pty until Ctrl-C.
+int run_gauge_emulate(const std::string& kind, const std::string& faults, std::uint64_t seed, double rate_hz);
+
+}  // namespace ballbar::app
