@@ -19,10 +19,13 @@ const std::map<std::string, std::string>& examples() {
         {"demo",
          "  ballbar demo                                 # TTTRR, the guided procedure on the emulator\n"
          "  ballbar demo --machine RRTTT --json\n"
-         "  ballbar demo --report demo.pdf --compensate\n"},
+         "  ballbar demo --report demo.pdf --compensate\n"
+         "  ballbar demo --instrument digimatic           # the procedure on an emulated digital gauge\n"},
         {"devices", "  ballbar devices\n  ballbar devices --json\n"},
         {"discover", "  ballbar discover readings.csv --json\n  ballbar discover 3\n"},
-        {"emulate", "  ballbar emulate --pty                        # prints the pty path to pass to measure\n"},
+        {"emulate",
+         "  ballbar emulate --pty                        # prints the pty path to pass to measure\n"
+         "  ballbar emulate --instrument sylvac --pty     # a Sylvac indicator instead\n"},
         {"export",
          "  ballbar export 3 --format readings --out s3.csv\n"
          "  ballbar export 3 --format json --out s3.json\n"},
@@ -32,9 +35,12 @@ const std::map<std::string, std::string>& examples() {
          "  ballbar measure --device serial:/dev/ttyACM0 --machine machine.json\n"
          "  ballbar measure --device serial:/dev/pts/5 --machine machine.json --plan plan.json\n"
          "  ballbar measure --resume 7 --device serial:/dev/ttyACM0\n"},
-        {"monitor", "  ballbar monitor --device serial:/dev/ttyACM0 --seconds 2 --json\n"},
+        {"monitor",
+         "  ballbar monitor --device serial:/dev/ttyACM0 --seconds 2 --json\n"
+         "  ballbar monitor --device sylvac:/dev/ttyUSB0\n"},
         {"report", "  ballbar report 3 --out s3.pdf\n  ballbar report 3 --json\n"},
         {"sessions", "  ballbar sessions\n  ballbar sessions show 3 --json\n"},
+        {"udev-rules", "  ballbar udev-rules > 70-ballbar-gauges.rules\n  ballbar udev-rules --plugdev\n"},
         {"solve", "  ballbar solve ssm < request.json\n  ballbar solve orientation --input request.json\n"},
     };
     return table;
