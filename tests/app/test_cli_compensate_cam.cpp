@@ -11,6 +11,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -390,6 +391,37 @@ TEST(CliCompensateCam, SummaryCountsTheModeOfEveryBlock) {
     EXPECT_EQ(o.summary["mode_switches"][0]["line"], 24);
     EXPECT_EQ(o.summary["mode_switches"][0]["mode"], "tool-centre-point");
     EXPECT_EQ(o.summary["retracts_uncompensated"], 1);
+}
+
+TEST(CliCompensateCam, IsoDirectionsAreBallbarsNegated) {
+    // The same program for an ISO-direction controller (every A and C word negated, and the table's
+    // rotary offsets) compensated with --iso-directions: the same motion, A and C negated back.
+    TempDir d;
+    const Outcome ballbar = compensate_and_run(d, cam_sample(), seed_like(), "");
+    std::string iso_program;
+    const std::string src = cam_sample();
+    const std::regex word("([AC])(-?)([0-9.]+)");
+    auto last = src.cbegin();
+    for (std::sregex_iterator it(src.begin(), src.end(), word), end; it != end; ++it) {
+        iso_program.append(last, (*it)[0].first);
+        iso_program += (*it)[1].str() + ((*it)[2].length() ? "" : "-") + (*it)[3].str();  // A30. <-> A-30.
+        last = (*it)[0].second;
+    }
+    iso_program.append(last, src.cend());
+    ASSERT_NE(iso_program.find("A-30. C-45."), std::string::npos) << iso_program;
+    std::ofstream(d.path / "iso.ngc") << iso_program;
+    std::ofstream(d.path / "model.json") << model_json(seed_like());
+    const CliRun r =
+        run(d, "compensate --model '" + d.file("model.json") + "' --program '" + d.file("iso.ngc") + "' --offsets '" +
+                   d.file("offsets.json") + "' --out '" + d.file("iso_out.ngc") + "' --decimals 7 --iso-directions");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto iso = read_program(slurp(d.path / "iso_out.ngc"), table());
+    ASSERT_EQ(iso.size(), ballbar.out.size());
+    for (const auto& [n, b] : ballbar.out) {
+        const BlockEnd& i = iso.at(n);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(i.p[k], b.p[k], 1e-9) << "N" << n;
+        for (int k = 3; k < 5; ++k) EXPECT_NEAR(i.p[k], -b.p[k], 1e-9) << "N" << n;
+    }
 }
 
 }  // namespace
