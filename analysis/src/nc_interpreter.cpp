@@ -32,6 +32,19 @@ bool iequal(std::string_view a, std::string_view b) {
     return true;
 }
 
+/// A character that starts no word: parameters and expressions get what to do about them.
+[[noreturn]] void unexpected(char c, int line) {
+    if (c == '#')
+        throw NcError(line,
+                      "parameters (#) are not supported: expand the program with the controller's interpreter "
+                      "(or the CAM post-processor) first");
+    if (c == '[')
+        throw NcError(line,
+                      "expressions ([ ]) are not supported: expand the program with the controller's "
+                      "interpreter (or the CAM post-processor) first");
+    throw NcError(line, std::string("unexpected character '") + c + "'");
+}
+
 /// A number after a word letter: [+-]digits[.digits] (no exponent, no nan/inf: NC has none).
 double number(std::string_view s, std::size_t& i, int line, char letter) {
     const std::size_t start = i;
@@ -41,7 +54,10 @@ double number(std::string_view s, std::size_t& i, int line, char letter) {
         if (s[i] != '.') ++digits;
         ++i;
     }
-    if (digits == 0) throw NcError(line, std::string("word ") + letter + " has no number");
+    if (digits == 0) {
+        if (i < s.size()) unexpected(s[i], line);
+        throw NcError(line, std::string("word ") + letter + " has no number");
+    }
     std::string_view num = s.substr(start, i - start);
     bool negative = false;
     if (num.front() == '+' || num.front() == '-') {
@@ -117,6 +133,14 @@ std::optional<TcpCodes> tcp_codes_for(std::string_view controller) {
 
 NcInterpreter::NcInterpreter(std::string_view text, NcInterpreterOptions options)
     : text_(text), opt_(std::move(options)), tcp_(opt_.tcp_at_start) {
+    // The G and M words among the switch codes, as numbers: a block's G1 is compared, not formatted.
+    for (const auto* list : {&opt_.tcp.on, &opt_.tcp.off})
+        for (const std::string& w : *list) {
+            if (w.size() < 2 || (upper(w[0]) != 'G' && upper(w[0]) != 'M')) continue;
+            double v = 0;
+            const auto r = std::from_chars(w.data() + 1, w.data() + w.size(), v);
+            if (r.ec == std::errc() && r.ptr == w.data() + w.size()) tcp_numeric_.emplace_back(upper(w[0]), v);
+        }
     if (opt_.iso_directions)  // the table is in the controller's directions; inside, ballbar's
         for (auto& [name, p] : opt_.offsets.work) {
             p.A_rad = -p.A_rad;
@@ -154,13 +178,9 @@ bool NcInterpreter::next(NcStep& step) {
 void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     const int line = line_;
     // Comments: ( … ) anywhere, ; to the end of the line. One pass finds whether the line has a
-    // comment, a parameter or an expression (find_first_of would call memchr per character).
-    bool has_comment = false;
-    for (const char c : raw)
-        if (c == '(' || c == ';') {
-            has_comment = true;
-            break;
-        }
+    // comment (find_first_of would call memchr per character).
+    const bool has_comment =
+        raw.find('(') != std::string_view::npos || raw.find(';') != std::string_view::npos;  // memchr, vectorised
     std::string code_buf;
     std::string_view code = raw;
     if (has_comment) {
@@ -194,14 +214,6 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         return;
     }
     if (code.front() == '/') throw NcError(line, "block delete '/' is not supported: remove the '/' blocks or the '/'");
-    if (code.find('#') != std::string_view::npos)
-        throw NcError(line,
-                      "parameters (#) are not supported: expand the program with the controller's interpreter "
-                      "(or the CAM post-processor) first");
-    if (code.find('[') != std::string_view::npos)
-        throw NcError(line,
-                      "expressions ([ ]) are not supported: expand the program with the controller's "
-                      "interpreter (or the CAM post-processor) first");
     if (upper(code.front()) == 'O') {
         std::size_t i = 1;
         while (i < code.size() && code[i] >= '0' && code[i] <= '9') ++i;
@@ -217,7 +229,11 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     ++blocks_;
 
     // Words.
-    std::optional<double> word[26];
+    // The words' values by letter: `seen` has bit (letter − 'A') set for those present (a 26-optional
+    // array would be zeroed per block: 10 % of a million-block run).
+    double value[26];
+    unsigned seen = 0;
+    auto has = [&](char c) { return (seen >> (c - 'A')) & 1u; };
     int motion_code = -1;  // 0..3 when the block names one
     bool dwell = false, g53 = false, g28 = false, tcp_switch = false;
     bool tool_change = false;
@@ -240,11 +256,11 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
             continue;
         }
         const std::size_t word_start = i;
-        if (!is_letter(code[i])) throw NcError(line, std::string("unexpected character '") + code[i] + "'");
+        if (!is_letter(code[i])) unexpected(code[i], line);
         // A keyword (Siemens TRAORI): letters followed by a non-digit.
-        std::size_t k = i;
-        while (k < code.size() && is_letter(code[k])) ++k;
-        if (k - i > 1) {
+        if (i + 1 < code.size() && is_letter(code[i + 1])) {
+            std::size_t k = i;
+            while (k < code.size() && is_letter(code[k])) ++k;
             const std::string_view kw = code.substr(i, k - i);
             if (is_code(opt_.tcp.on, kw) || is_code(opt_.tcp.off, kw)) {
                 tcp_ = is_code(opt_.tcp.on, kw);
@@ -260,12 +276,12 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         while (i < code.size() && is_space(code[i])) ++i;
         const double v = number(code, i, line, c);
         const std::string_view text = code.substr(word_start, i - word_start);
-        if ((c == 'G' || c == 'M') && (!opt_.tcp.on.empty() || !opt_.tcp.off.empty())) {
+        if ((c == 'G' || c == 'M') && is_tcp_code(c, v)) {
             char nb[40];
             nb[0] = c;
             const auto nr = std::to_chars(nb + 1, nb + sizeof nb, v);
             const std::string_view name(nb, static_cast<std::size_t>(nr.ptr - nb));
-            if (is_code(opt_.tcp.on, name) || is_code(opt_.tcp.off, name)) {
+            {
                 if (name == "G43.4" || (c == 'G' && v == 49)) {
                     // Fanuc: tool-centre point with tool length (H), G49 cancels both.
                 } else {
@@ -412,9 +428,9 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         if (c == 'C' && opt_.second_rotary != 'C')
             throw NcError(line,
                           "C word: the model's machine has rotary axes A and B (a model of another machine type?)");
-        auto& slot = word[c - 'A'];
-        if (slot) throw NcError(line, std::string("word ") + c + " twice in one block");
-        slot = v;
+        if (has(c)) throw NcError(line, std::string("word ") + c + " twice in one block");
+        seen |= 1u << (c - 'A');
+        value[c - 'A'] = v;
         if (c == 'T') {
             if (std::floor(v) != v || v < 0) throw NcError(line, "T word must be a tool number");
             next_tool_ = static_cast<int>(v);
@@ -427,7 +443,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         }
     }
     if (tool_change) tool_ = next_tool_;
-    if (word['P' - 'A'] && motion_code >= 2) throw NcError(line, "P on an arc (turns) is not supported");
+    if (has('P') && motion_code >= 2) throw NcError(line, "P on an arc (turns) is not supported");
 
     // Tool length.
     if (g49) {
@@ -439,7 +455,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         }
     }
     if (g43) {
-        const int reg = word['H' - 'A'] ? static_cast<int>(*word['H' - 'A']) : tool_;
+        const int reg = has('H') ? static_cast<int>(value['H' - 'A']) : tool_;
         const auto it = opt_.offsets.tool_length_mm.find(reg);
         if (it == opt_.offsets.tool_length_mm.end())
             throw NcError(line, "G43 needs the length of tool " + std::to_string(reg) +
@@ -460,12 +476,11 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     Pose target = pos_now_;
     int named = 0;
     for (char c : {'X', 'Y', 'Z', 'A', 'B', 'C'}) {
-        const auto& w = word[c - 'A'];
-        if (!w) continue;
+        if (!has(c)) continue;
         has_axis = true;
         const int k = axis_index(c);
         named |= 1 << k;
-        double v = *w;
+        double v = value[c - 'A'];
         if (k < 3) {
             if (inch_) v *= kInch;
         } else {
@@ -483,7 +498,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         // reference point): copied as written and not compensated.
         bool zero = true;
         for (char c : {'X', 'Y', 'Z', 'A', 'B', 'C'})
-            if (word[c - 'A'] && *word[c - 'A'] != 0) zero = false;
+            if (has(c) && value[c - 'A'] != 0) zero = false;
         if (!g91_in_block || !zero || motion_code >= 0)
             throw NcError(line, "G28/G30 is supported only as the retract \"G91 G28 Z0\" (incremental, zero words)");
         step.verbatim.assign(code);
@@ -524,9 +539,10 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     step.work_offset = g53 ? Pose{} : work_offset_;
     step.tool_length_active = tool_length_active_;
     step.tool_length_mm = tool_length_mm_;
-    if (const auto& f = word['F' - 'A']) {
-        if (*f <= 0) throw NcError(line, "feed F must be positive");
-        step.feed = (inch_ && !inverse_time_) ? *f * kInch : *f;
+    if (has('F')) {
+        const double f = value['F' - 'A'];
+        if (f <= 0) throw NcError(line, "feed F must be positive");
+        step.feed = (inch_ && !inverse_time_) ? f * kInch : f;
     } else if (step.inverse_time) {
         throw NcError(line, "G93 (inverse time) needs an F word in every feed block");
     }
@@ -534,19 +550,25 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     if (motion_ >= 2) {
         if (g53) throw NcError(line, "G53 with an arc");
         const double scale = inch_ ? kInch : 1.0;
-        auto w = [&](char c) { return word[c - 'A'] ? *word[c - 'A'] * scale : 0.0; };
-        const bool have_ijk = word['I' - 'A'] || word['J' - 'A'] || word['K' - 'A'];
+        auto w = [&](char c) { return has(c) ? value[c - 'A'] * scale : 0.0; };
+        const bool have_ijk = has('I') || has('J') || has('K');
         std::optional<double> r;
-        if (word['R' - 'A']) r = *word['R' - 'A'] * scale;
+        if (has('R')) r = value['R' - 'A'] * scale;
         if (have_ijk && r) throw NcError(line, "arc with both I/J/K and R");
         if (!have_ijk && !r) throw NcError(line, "arc without a centre (I/J/K) or a radius (R)");
         arc_points(step, target, w('I'), w('J'), w('K'), r, motion_ == 2, have_ijk);
     } else {
         for (char c : {'I', 'J', 'K', 'R'})
-            if (word[c - 'A']) throw NcError(line, std::string("word ") + c + " outside an arc");
+            if (has(c)) throw NcError(line, std::string("word ") + c + " outside an arc");
         step.points.push_back(target);
     }
     pos_now_ = target;
+}
+
+bool NcInterpreter::is_tcp_code(char letter, double v) const {
+    for (const auto& [l, n] : tcp_numeric_)
+        if (l == letter && n == v) return true;
+    return false;
 }
 
 void NcInterpreter::arc_points(NcStep& step, const Pose& end, double i, double j, double k, std::optional<double> r,

@@ -43,11 +43,11 @@ TEST(NcInterpreter, ArcsInEveryPlaneStayOnTheirCircleWithinTheChordTolerance) {
         double cu, cv, r;
     };
     const std::vector<Case> cases = {
-        {"G17 G3 X10 Y10 I0 J10", 0, 1, 0, 10, 10},   // quarter, centre (0, 10)
-        {"G18 G2 X10 Z10 K10 I0", 2, 0, 10, 0, 10},   // plane Z-X, centre z = 10, x = 0
-        {"G19 G3 Y10 Z10 J0 K10", 1, 2, 0, 10, 10},   // plane Y-Z
-        {"G17 G2 X20 Y0 R10", 0, 1, 10, 0, 10},       // half circle by R
-        {"G17 G3 I5", 0, 1, 5, 0, 5},                 // full circle
+        {"G17 G3 X10 Y10 I0 J10", 0, 1, 0, 10, 10},  // quarter, centre (0, 10)
+        {"G18 G2 X10 Z10 K10 I0", 2, 0, 10, 0, 10},  // plane Z-X, centre z = 10, x = 0
+        {"G19 G3 Y10 Z10 J0 K10", 1, 2, 0, 10, 10},  // plane Y-Z
+        {"G17 G2 X20 Y0 R10", 0, 1, 10, 0, 10},      // half circle by R
+        {"G17 G3 I5", 0, 1, 5, 0, 5},                // full circle
     };
     for (const auto& c : cases) {
         const auto s = interpret("%\nG0 X0 Y0 Z0 A0 C0\n" + c.program + " F100\nM30\n%\n", o);

@@ -92,8 +92,11 @@ class NcInterpreter {
     void arc_points(NcStep& step, const Pose& end, double i, double j, double k, std::optional<double> r, bool cw,
                     bool have_ijk);
 
+    bool is_tcp_code(char letter, double value) const;
+
     std::string_view text_;
     NcInterpreterOptions opt_;
+    std::vector<std::pair<char, double>> tcp_numeric_;  // the G/M switch codes as (letter, number)
     std::size_t pos_ = 0;
     int line_ = 0;
     std::size_t blocks_ = 0;
