@@ -391,6 +391,12 @@ TEST(CliCompensateCam, SummaryCountsTheModeOfEveryBlock) {
     EXPECT_EQ(o.summary["mode_switches"][0]["line"], 24);
     EXPECT_EQ(o.summary["mode_switches"][0]["mode"], "tool-centre-point");
     EXPECT_EQ(o.summary["retracts_uncompensated"], 1);
+    // Machine functions, tool changes, offsets and the switch words pass through as written.
+    const std::string out = slurp(d.path / "out.ngc");
+    for (const char* kept : {"N20 T1 M6 (tool change)", "N30 G54\n", "G43 H1", "N50 S12000 M3\n", "N60 M8 (coolant)",
+                             "N200 M428 (tool-centre point on)", "G91 G28 Z0.\nG90\n", "N310 M30\n"})
+        EXPECT_NE(out.find(kept), std::string::npos) << kept << " missing from\n" << out;
+    EXPECT_EQ(out.find("G2 "), std::string::npos) << "arcs are written as chords";
 }
 
 TEST(CliCompensateCam, IsoDirectionsAreBallbarsNegated) {
