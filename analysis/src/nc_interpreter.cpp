@@ -381,7 +381,16 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
                         throw NcError(line, name + " needs its work offset: give it in the --offsets table (" +
                                                 (opt_.have_offsets ? "it has no \"" + name + "\"" : "none given") +
                                                 ")");
-                    work_offset_ = it->second;
+                    // The machine stays where it is: the program position of the unnamed axes moves.
+                    const Pose& next = it->second;
+                    pos_now_.X_mm += work_offset_.X_mm - next.X_mm;
+                    pos_now_.Y_mm += work_offset_.Y_mm - next.Y_mm;
+                    pos_now_.Z_mm += work_offset_.Z_mm - next.Z_mm;
+                    pos_now_.A_rad += work_offset_.A_rad - next.A_rad;
+                    pos_now_.B_rad += work_offset_.B_rad - next.B_rad;
+                    pos_now_.C_rad += work_offset_.C_rad - next.C_rad;
+                    if (tcp_) known_ = 0;
+                    work_offset_ = next;
                     add_word(text);
                     break;
                 }
@@ -445,7 +454,9 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     if (tool_change) tool_ = next_tool_;
     if (has('P') && motion_code >= 2) throw NcError(line, "P on an arc (turns) is not supported");
 
-    // Tool length.
+    // Tool length. G43/G49 do not move the machine: the program Z of the current point changes.
+    const double lm = opt_.offsets.measured_tool_length_mm;
+    const double dl_before = tool_length_active_ ? tool_length_mm_ - lm : 0.0;
     if (g49) {
         tool_length_active_ = false;
         tool_length_mm_ = 0;
@@ -468,6 +479,11 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
             tcp_ = true;
             tcp_switch = true;
         }
+    }
+    const double dl_after = tool_length_active_ ? tool_length_mm_ - lm : 0.0;
+    if (dl_after != dl_before) {
+        pos_now_.Z_mm += dl_before - dl_after;
+        if (tcp_) known_ = 0;  // in TCP mode the length enters the kinematics: name every axis
     }
     if (tcp_switch) known_ = 0;
 

@@ -101,6 +101,24 @@ TEST(NcInterpreter, IsoDirectionsNegateRotaryWordsAndOffsets) {
     EXPECT_NEAR(s[0].work_offset.C_rad, ba::deg_to_rad(-5), 1e-15);
 }
 
+TEST(NcInterpreter, OffsetChangesKeepTheMachineWhereItIs) {
+    ba::NcInterpreterOptions o;
+    ba::Pose g54, g55;
+    g54.Y_mm = 10;
+    g55.Y_mm = -5;
+    o.offsets.work["G54"] = g54;
+    o.offsets.work["G55"] = g55;
+    o.offsets.tool_length_mm[1] = 80;
+    o.offsets.tool_length_mm[2] = 50;
+    o.have_offsets = true;
+    const auto s = interpret("%\nG54 G0 X0 Y0 Z100 A0 C0\nG55\nG1 X5 F100\nG43 H1\nG1 X6\nG43 H2\nX7\nM30\n%\n", o);
+    ASSERT_EQ(s.size(), 4u);
+    EXPECT_DOUBLE_EQ(s[1].points[0].Y_mm, 15);  // machine Y 10: in G55 (−5) that is 15
+    EXPECT_DOUBLE_EQ(s[2].points[0].Z_mm, 20);  // the gauge line stays at 100 − 80 above the tip
+    EXPECT_DOUBLE_EQ(s[3].points[0].Z_mm, 50);  // a 30 mm shorter tool: its tip 30 mm higher
+    EXPECT_DOUBLE_EQ(s[3].tool_length_mm, 50);
+}
+
 TEST(NcInterpreter, RefusesWhatItCannotKnow) {
     for (const char* bad : {"G0 X0 Y0 Z0 A0 C0 B5", "G0 X0 Y0 Z0 A0 C0 X2", "G0 G1 X0 Y0 Z0 A0 C0",
                             "G81 X0 Y0 Z0 A0 C0 R1", "G68 X0 Y0 R45", "M98 P100", "G0 X0 Y0 Z0 A0 C0 U1"}) {
