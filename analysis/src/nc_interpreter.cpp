@@ -487,9 +487,20 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     }
     if (tcp_switch) known_ = 0;
 
-    // Axis words to absolute positions (mm, rad, ballbar directions).
+    // Axis words to absolute positions (mm, rad, ballbar directions). G53: machine coordinates, the
+    // unnamed axes where the machine is.
+    if (g53 && (!absolute_ || tcp_ || tool_length_active_))
+        throw NcError(line, "G53 is supported in G90, out of tool-centre-point mode and without G43 in force");
     bool has_axis = false;
     Pose target = pos_now_;
+    if (g53) {
+        target.X_mm += work_offset_.X_mm;
+        target.Y_mm += work_offset_.Y_mm;
+        target.Z_mm += work_offset_.Z_mm;
+        target.A_rad += work_offset_.A_rad;
+        target.B_rad += work_offset_.B_rad;
+        target.C_rad += work_offset_.C_rad;
+    }
     int named = 0;
     for (char c : {'X', 'Y', 'Z', 'A', 'B', 'C'}) {
         if (!has(c)) continue;
@@ -531,7 +542,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     // Every axis of the model must have a known position for an absolute move.
     const int model_axes = 0b000111 | (1 << 3) | (1 << (opt_.second_rotary == 'B' ? 4 : 5));
     const int missing = model_axes & ~(known_ | named);
-    if (missing && !(g53))
+    if (missing)
         for (int k = 0; k < 6; ++k)
             if (missing & (1 << k)) {
                 if (!absolute_ || (known_ & (1 << k)) == 0)
@@ -544,7 +555,6 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
             if ((named & (1 << k)) && !(known_ & (1 << k)))
                 throw NcError(line, std::string("incremental move of ") + "XYZABC"[k] + " from an unknown position");
     }
-    if (missing && g53) throw NcError(line, "G53 moves must name every axis of the machine");
     known_ |= named;
 
     step.motion = motion_ == 0 ? NcMotion::Rapid : NcMotion::Feed;
@@ -579,6 +589,14 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         step.points.push_back(target);
     }
     pos_now_ = target;
+    if (g53) {  // back to the program frame
+        pos_now_.X_mm -= work_offset_.X_mm;
+        pos_now_.Y_mm -= work_offset_.Y_mm;
+        pos_now_.Z_mm -= work_offset_.Z_mm;
+        pos_now_.A_rad -= work_offset_.A_rad;
+        pos_now_.B_rad -= work_offset_.B_rad;
+        pos_now_.C_rad -= work_offset_.C_rad;
+    }
 }
 
 bool NcInterpreter::is_tcp_code(char letter, double v) const {

@@ -117,6 +117,14 @@ TEST(NcInterpreter, OffsetChangesKeepTheMachineWhereItIs) {
     EXPECT_DOUBLE_EQ(s[2].points[0].Z_mm, 20);  // the gauge line stays at 100 − 80 above the tip
     EXPECT_DOUBLE_EQ(s[3].points[0].Z_mm, 50);  // a 30 mm shorter tool: its tip 30 mm higher
     EXPECT_DOUBLE_EQ(s[3].tool_length_mm, 50);
+    // G53 Z0 (the machine-coordinate retract): the other axes stay where the machine is.
+    const auto r = interpret("%\nG55 G0 X1 Y2 Z3 A0 C0\nG53 G0 Z0\nG0 X4\nM30\n%\n", o);
+    ASSERT_EQ(r.size(), 3u);
+    EXPECT_TRUE(r[1].machine_coordinates);
+    EXPECT_DOUBLE_EQ(r[1].points[0].Y_mm, -3);  // machine Y of program Y 2 in G55
+    EXPECT_DOUBLE_EQ(r[1].points[0].Z_mm, 0);
+    EXPECT_DOUBLE_EQ(r[2].points[0].Z_mm, 0);  // program Z after machine Z 0 (G55 has no Z)
+    EXPECT_DOUBLE_EQ(r[2].points[0].Y_mm, 2);
 }
 
 TEST(NcInterpreter, RefusesWhatItCannotKnow) {
