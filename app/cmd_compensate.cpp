@@ -5,6 +5,7 @@
 // `ballbar-model/1` JSON file (what `ballbar identify` stores), a model id in the database, or a model
 // name (its latest version). Reports the largest correction and the blocks near a singularity.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "ballbar/analysis/compensate.hpp"
+#include "ballbar/analysis/nc_compensate.hpp"
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/store.hpp"
@@ -34,9 +36,21 @@ struct CompensateArgs {
     std::string program;
     std::string out;
     std::string dialect;
+    std::string offsets;
+    std::string controller;
+    std::string tcp_on, tcp_off;
+    bool tcp = false;
+    bool iso_directions = false;
+    double chord_tolerance_mm = 0.001;
+    double max_correction_mm = 1.0;
+    double max_correction_deg = 0.1;
+    int decimals = 4;
+    int max_iterations = 20;
+    bool force = false;
+    bool allow_truncated = false;
     bool exact = false;
     bool json = false;
-    double singular_deg = 0.06;
+    double singular_deg = ba::kDefaultSingularDeg;
 };
 
 struct Model {
@@ -183,98 +197,216 @@ class OutputFile {
     bool stdout_ = false, direct_ = false, committed_ = false;
 };
 
+/// The work-offset and tool table (docs/compensation.md, "The offsets table").
+ba::NcOffsetTable parse_offsets(const std::string& text, const std::string& source) {
+    json j;
+    try {
+        j = json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw CliError(kExitUsage, source + ": malformed JSON: " + e.what());
+    }
+    if (!j.is_object()) throw CliError(kExitUsage, source + ": the table must be a JSON object");
+    auto number = [&](const json& v, const std::string& field) {
+        if (!v.is_number() || !std::isfinite(v.get<double>()) || std::abs(v.get<double>()) > 1e7)
+            throw CliError(kExitUsage, source + ": " + field + ": must be a finite number (|value| <= 1e7)");
+        return v.get<double>();
+    };
+    ba::NcOffsetTable t;
+    for (const auto& item : j.items()) {
+        const std::string& key = item.key();
+        if (key == "format") {
+            if (item.value() != "ballbar-nc-offsets/1")
+                throw CliError(kExitUsage, source + ": format " + item.value().dump() + " is not ballbar-nc-offsets/1");
+        } else if (key == "measured_tool_length_mm") {
+            t.measured_tool_length_mm = number(item.value(), key);
+        } else if (key == "work_offsets") {
+            if (!item.value().is_object()) throw CliError(kExitUsage, source + ": work_offsets must be an object");
+            for (const auto& w : item.value().items()) {
+                static const char* names[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
+                if (std::find(std::begin(names), std::end(names), w.key()) == std::end(names))
+                    throw CliError(kExitUsage, source + ": work_offsets." + w.key() + ": not G54–G59 or G59.1–G59.3");
+                if (!w.value().is_object())
+                    throw CliError(kExitUsage, source + ": work_offsets." + w.key() + " must be an object");
+                ba::Pose p;
+                for (const auto& a : w.value().items()) {
+                    const std::string f = "work_offsets." + w.key() + "." + a.key();
+                    const double v = number(a.value(), f);
+                    if (a.key() == "X_mm")
+                        p.X_mm = v;
+                    else if (a.key() == "Y_mm")
+                        p.Y_mm = v;
+                    else if (a.key() == "Z_mm")
+                        p.Z_mm = v;
+                    else if (a.key() == "A_deg")
+                        p.A_rad = ba::deg_to_rad(v);
+                    else if (a.key() == "B_deg")
+                        p.B_rad = ba::deg_to_rad(v);
+                    else if (a.key() == "C_deg")
+                        p.C_rad = ba::deg_to_rad(v);
+                    else
+                        throw CliError(kExitUsage, source + ": " + f + ": unknown (X_mm Y_mm Z_mm A_deg B_deg C_deg)");
+                }
+                t.work[w.key()] = p;
+            }
+        } else if (key == "tools") {
+            if (!item.value().is_object()) throw CliError(kExitUsage, source + ": tools must be an object");
+            for (const auto& tl : item.value().items()) {
+                const std::string& k = tl.key();
+                if (k.empty() || k.size() > 6 ||
+                    !std::all_of(k.begin(), k.end(), [](char c) { return c >= '0' && c <= '9'; }))
+                    throw CliError(kExitUsage, source + ": tools." + k + ": the key must be a tool number");
+                if (!tl.value().is_object() || !tl.value().contains("length_mm") || tl.value().size() != 1)
+                    throw CliError(kExitUsage, source + ": tools." + k + " must be {\"length_mm\": L}");
+                t.tool_length_mm[std::stoi(k)] = number(tl.value()["length_mm"], "tools." + k + ".length_mm");
+            }
+        } else {
+            throw CliError(kExitUsage,
+                           source + ": " + key + ": unknown field (work_offsets, tools, measured_tool_length_mm)");
+        }
+    }
+    return t;
+}
+
+std::vector<std::string> split_codes(const std::string& list) {
+    std::vector<std::string> out;
+    std::string cur;
+    for (char c : list + ",") {
+        if (c == ',' || c == ' ') {
+            if (!cur.empty()) out.push_back(cur);
+            cur.clear();
+        } else {
+            cur += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+        }
+    }
+    return out;
+}
+
+/// --out must not be one of the inputs (it would be replaced by its own compensation).
+void refuse_out_over_input(const std::string& out, const std::string& input, const char* what) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (out == "-" || input.empty()) return;
+    const bool same = fs::exists(out, ec) && fs::exists(input, ec) && fs::equivalent(out, input, ec) && !ec;
+    if (same || fs::weakly_canonical(out, ec) == fs::weakly_canonical(input, ec))
+        throw CliError(kExitUsage, "--out " + out + " is the " + what + ": it would be overwritten (write elsewhere)");
+}
+
 int run_compensate(const CompensateArgs& args, const Globals& globals) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::is_directory(args.program, ec))
+        throw CliError(kExitUsage, "--program " + args.program + " is a directory, not an NC program");
+    refuse_out_over_input(args.out, args.program, "program");
+    if (fs::is_regular_file(args.model, ec)) refuse_out_over_input(args.out, args.model, "model file");
+    refuse_out_over_input(args.out, resolve_db_path(globals), "database");
+    if (!args.offsets.empty()) refuse_out_over_input(args.out, args.offsets, "offsets table");
+    if (!(args.chord_tolerance_mm > 0)) throw CliError(kExitUsage, "--chord-tolerance must be positive");
+
     const Model model = load_model(args.model, globals);
     const ba::NcDialect dialect = pick_dialect(args);
     const std::string text = read_file(args.program, "program");
-    ba::CompensationOptions co;
-    co.singular_tolerance = std::sin(ba::deg_to_rad(args.singular_deg));
-    const ba::Compensator comp(model.machine, model.params, co);
-    const bool second_is_c = ba::rotary_axes(model.machine.type).second == 'C';
 
-    // Streams: one block is parsed, compensated and written at a time, in 1 MiB chunks.
+    ba::NcInterpreterOptions io;
+    io.dialect = dialect;
+    if (!args.offsets.empty()) {
+        io.offsets = parse_offsets(read_file(args.offsets, "offsets table"), args.offsets);
+        io.have_offsets = true;
+    }
+    const std::string controller =
+        !args.controller.empty() ? args.controller : (dialect == ba::NcDialect::LinuxCNC ? "linuxcnc" : "fanuc");
+    const auto codes = ba::tcp_codes_for(controller);
+    if (!codes)
+        throw CliError(kExitUsage, "--controller: '" + controller + "' (linuxcnc, fanuc, siemens, heidenhain, none)");
+    io.tcp = *codes;
+    if (!args.tcp_on.empty()) io.tcp.on = split_codes(args.tcp_on);
+    if (!args.tcp_off.empty()) io.tcp.off = split_codes(args.tcp_off);
+    io.tcp_at_start = args.tcp;
+    io.iso_directions = args.iso_directions;
+    io.chord_tolerance_mm = args.chord_tolerance_mm;
+
+    ba::NcCompensateOptions co;
+    co.exact = args.exact;
+    co.solver.singular_tolerance = std::sin(ba::deg_to_rad(args.singular_deg));
+    co.max_linear_mm = args.max_correction_mm;
+    co.max_rotary_rad = ba::deg_to_rad(args.max_correction_deg);
+    co.force = args.force;
+    co.decimals = args.decimals;
+    co.solver.max_iterations = args.max_iterations;
+    co.allow_truncated = args.allow_truncated;
+    co.title = "compensated by ballbar with " + model.source;
+
     OutputFile out(args.out);
-    std::string chunk;
-    constexpr std::size_t kChunkBytes = 1 << 20;
-    chunk.reserve(kChunkBytes + 4096);
-    auto flush = [&] {
-        out.write(chunk);
-        chunk.clear();
-    };
-
-    std::size_t blocks = 0;
-    std::size_t compensated = 0;
-    double max_linear = 0, max_rotary = 0;
-    int max_linear_line = 0, max_rotary_line = 0;
-    std::vector<int> singular_lines;
-    std::size_t singular_count = 0;
-    ba::write_nc_header(chunk, dialect, "compensated by ballbar with " + model.source);
+    ba::NcCompensateSummary s;
     try {
-        ba::NcReader reader(text, dialect);
-        ba::NcBlock b;
-        ba::Pose pose;  // modal: the absolute commanded pose after each block
-        while (reader.next(b)) {
-            ++blocks;
-            pose = ba::pose_after(b, pose);
-            if (b.motion == ba::NcMotion::Rapid || b.motion == ba::NcMotion::Feed) {
-                const ba::Correction c = args.exact ? comp.exact(pose) : comp.first_order(pose);
-                const double lin = std::sqrt(c.du[0] * c.du[0] + c.du[1] * c.du[1] + c.du[2] * c.du[2]);
-                const double rot = std::max(std::abs(c.du[3]), std::abs(c.du[4]));
-                if (lin > max_linear) {
-                    max_linear = lin;
-                    max_linear_line = b.line;
-                }
-                if (rot > max_rotary) {
-                    max_rotary = rot;
-                    max_rotary_line = b.line;
-                }
-                if (c.singular) {
-                    ++singular_count;
-                    if (singular_lines.size() < 20) singular_lines.push_back(b.line);
-                }
-                b.X_mm = c.commanded.X_mm;
-                b.Y_mm = c.commanded.Y_mm;
-                b.Z_mm = c.commanded.Z_mm;
-                b.A_rad = c.commanded.A_rad;
-                if (second_is_c)
-                    b.C_rad = c.commanded.C_rad;
-                else
-                    b.B_rad = c.commanded.B_rad;
-                ++compensated;
-            }
-            ba::write_nc_block(chunk, b, dialect);
-            if (chunk.size() >= kChunkBytes) flush();
-        }
+        s = ba::compensate_nc_program(text, model.machine, model.params, io, co,
+                                      [&](std::string_view chunk) { out.write(chunk); });
     } catch (const ba::NcError& e) {
         throw CliError(kExitUsage, args.program + ": " + e.what());  // `out` removes its .part
+    } catch (const ba::AnalysisError& e) {
+        throw CliError(kExitUsage, args.program + ": " + e.what());
     }
-    ba::write_nc_footer(chunk, dialect);
-    flush();
-    out.commit();
+    const bool failed = s.not_converged > 0 && !args.force;
+    if (!failed) out.commit();
     std::ostream& report = out.is_stdout() ? std::cerr : std::cout;  // the program has stdout
+    auto mode_name = [](ba::NcFrame f) { return f == ba::NcFrame::Tcp ? "tool-centre-point" : "joint"; };
     if (args.json) {
-        json j{{"blocks", blocks},
-               {"compensated", compensated},
+        json switches = json::array();
+        for (const auto& [line, f] : s.mode_switches) switches.push_back({{"line", line}, {"mode", mode_name(f)}});
+        json j{{"blocks", s.blocks},
+               {"compensated", s.moves},
+               {"points", s.points},
+               {"arcs", s.arcs},
+               {"arc_chords", s.arc_chords},
+               {"chord_tolerance_mm", args.chord_tolerance_mm},
+               {"modes", {{"joint", s.joint_moves}, {"tool-centre-point", s.tcp_moves}}},
+               {"mode_switches", switches},
+               {"retracts_uncompensated", s.retracts},
                {"method", args.exact ? "exact" : "first-order"},
-               {"max_linear_correction_mm", max_linear},
-               {"max_linear_correction_line", max_linear_line},
-               {"max_rotary_correction_deg", ba::rad_to_deg(max_rotary)},
-               {"max_rotary_correction_line", max_rotary_line},
-               {"singular_blocks", singular_count},
-               {"singular_lines", singular_lines},
+               {"directions", args.iso_directions ? "iso" : "ballbar"},
+               {"max_linear_correction_mm", s.max_linear_mm},
+               {"max_linear_correction_line", s.max_linear_line},
+               {"max_rotary_correction_deg", ba::rad_to_deg(s.max_rotary_rad)},
+               {"max_rotary_correction_line", s.max_rotary_line},
+               {"singular_blocks", s.singular},
+               {"singular_lines", s.singular_lines},
+               {"not_converged", s.not_converged},
+               {"not_converged_lines", s.not_converged_lines},
+               {"over_bound_forced", s.over_bound},
+               {"truncated", s.truncated},
+               {"written", !failed},
                {"out", args.out}};
         report << j.dump(2) << '\n';
     } else {
-        report << "compensated " << compensated << " of " << blocks << " blocks ("
-               << (args.exact ? "exact" : "first-order") << ") -> " << args.out << '\n'
-               << "largest correction: " << max_linear * 1e3 << " um linear (line " << max_linear_line << "), "
-               << ba::rad_to_deg(max_rotary) * 3600.0 << " arcsec rotary (line " << max_rotary_line << ")\n";
-        if (singular_count > 0) {
-            report << singular_count << " block(s) within " << args.singular_deg
-                   << " deg of a singularity (rotary axis parallel to the tool): that axis was not corrected; lines";
-            for (int l : singular_lines) report << ' ' << l;
-            report << (singular_count > singular_lines.size() ? " ...\n" : "\n");
+        report << "compensated " << s.moves << " of " << s.blocks << " blocks ("
+               << (args.exact ? "exact" : "first-order") << ", " << s.points << " points) -> "
+               << (failed ? "nothing written" : args.out) << '\n'
+               << "modes: " << s.joint_moves << " joint, " << s.tcp_moves << " tool-centre-point";
+        if (!s.mode_switches.empty()) {
+            report << " (switches at lines";
+            for (const auto& [line, f] : s.mode_switches) report << ' ' << line << ':' << mode_name(f);
+            report << ')';
         }
+        report << '\n';
+        if (s.arcs > 0)
+            report << s.arcs << " arc(s) as " << s.arc_chords << " chords within " << args.chord_tolerance_mm * 1e3
+                   << " um\n";
+        if (s.retracts > 0) report << s.retracts << " retract(s) (G91 G28) copied uncompensated\n";
+        report << "largest correction: " << s.max_linear_mm * 1e3 << " um linear (line " << s.max_linear_line << "), "
+               << ba::rad_to_deg(s.max_rotary_rad) * 3600.0 << " arcsec rotary (line " << s.max_rotary_line << ")\n";
+        if (s.singular > 0) {
+            report << s.singular << " point(s) within " << args.singular_deg
+                   << " deg of a singularity (rotary axis parallel to the tool): that axis was not corrected; lines";
+            for (int l : s.singular_lines) report << ' ' << l;
+            report << (s.singular > s.singular_lines.size() ? " ...\n" : "\n");
+        }
+        if (s.over_bound > 0) report << s.over_bound << " correction(s) beyond the bound written (--force)\n";
+        if (s.truncated) report << "the program has no end (M2/M30/%): compensated as it is (--allow-truncated)\n";
+    }
+    if (s.not_converged > 0) {
+        std::cerr << "ballbar: --exact did not converge for " << s.not_converged << " point(s), lines";
+        for (int l : s.not_converged_lines) std::cerr << ' ' << l;
+        std::cerr << (failed ? "; nothing written (--force writes it anyway)\n" : "; written (--force)\n");
+        return kExitFailure;
     }
     return kExitOk;
 }
@@ -294,6 +426,28 @@ BALLBAR_COMMAND(compensate) {
     sub->add_option("--singular-deg", args->singular_deg,
                     "within this angle of a singularity the rotary axis is not corrected (default 0.06)")
         ->check(CLI::Range(0.0, 45.0));
+    sub->add_option("--offsets", args->offsets, "work-offset and tool table (JSON, docs/compensation.md)");
+    sub->add_option("--controller", args->controller,
+                    "tool-centre-point codes of: linuxcnc (M428/M429), fanuc (G43.4/G49), siemens (TRAORI/TRAFOOF), "
+                    "heidenhain (M128/M129), none (default: by dialect)");
+    sub->add_option("--tcp-on", args->tcp_on, "words that switch tool-centre-point mode on (comma-separated)");
+    sub->add_option("--tcp-off", args->tcp_off, "words that switch it off");
+    sub->add_flag("--tcp", args->tcp, "the program starts in tool-centre-point (workpiece) coordinates");
+    sub->add_flag("--iso-directions", args->iso_directions,
+                  "the program's +A/+C are ISO's (LinuxCNC conventional-directions): the opposite of ballbar's");
+    sub->add_option("--chord-tolerance", args->chord_tolerance_mm,
+                    "arcs are written as chords within this of the arc, mm (default 0.001)");
+    sub->add_option("--max-correction-mm", args->max_correction_mm, "refuse a larger linear correction (default 1)")
+        ->check(CLI::Range(1e-6, 100.0));
+    sub->add_option("--max-correction-deg", args->max_correction_deg,
+                    "refuse a larger rotary correction; no angle moves more (default 0.1)")
+        ->check(CLI::Range(1e-6, 10.0));
+    sub->add_option("--max-iterations", args->max_iterations, "--exact: Newton iterations at most (default 20)")
+        ->check(CLI::Range(1, 1000));
+    sub->add_option("--decimals", args->decimals, "digits after the point of the axis words (default 4)")
+        ->check(CLI::Range(3, 8));
+    sub->add_flag("--force", args->force, "write corrections beyond the bounds, and --exact non-convergence, anyway");
+    sub->add_flag("--allow-truncated", args->allow_truncated, "compensate a program without M2/M30/% as it is");
     sub->add_flag("--json", args->json, "print the report as JSON");
     sub->footer("See docs/compensation.md.");
     sub->callback([&globals, args] { globals.action = [&globals, args]() { return run_compensate(*args, globals); }; });

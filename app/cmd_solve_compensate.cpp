@@ -2,7 +2,7 @@
 // `ballbar solve compensate`: the Lei & Hsu X'Y'ZA'C' correction as a JSON service (lei_hsu.hpp).
 //   in:  {"kinematics":"lei-hsu", "offsets_mm":{"Xw0":…, "Yw0":…, "Zw0":…, "Z3":…},
 //         "u":[x_m, y_m, z_m, theta_a_rad, theta_c_rad], "dv":[dx, dy, dz, di, dj, dk],
-//         "singular_tolerance":1e-9}                       (offsets_mm and singular_tolerance optional)
+//         "singular_tolerance":sin(0.06°)}                 (offsets_mm and singular_tolerance optional)
 //   out: {"du":[…], "exact_du":[…], "singular":false, "method":"…", "exact_iterations":k}
 // dv = ideal − actual pose in workpiece coordinates (the paper's Eq. 16). A malformed request gets
 // {"error": …, "field": …} on stderr and exit code 2.
@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "ballbar/analysis/compensate.hpp"
 #include "ballbar/analysis/lei_hsu.hpp"
 #include "command.hpp"
 
@@ -74,7 +75,9 @@ json solve_compensate(const json& req) {
                 throw BadField{"unknown field", f};
         }
     }
-    double tol = 1e-9;
+    // The same default as `ballbar compensate --singular-deg` (0.06°): a tolerance of 1e-9 let dθc
+    // grow to 1/sin(θa) ≈ 1e9 × the direction error near θa = 0.
+    double tol = ba::default_singular_tolerance();
     if (const auto t = req.find("singular_tolerance"); t != req.end() && !t->is_null()) {
         tol = finite_number(*t, "singular_tolerance");
         if (tol < 0 || tol >= 1) throw BadField{"must be in [0, 1)", "singular_tolerance"};

@@ -133,6 +133,10 @@ ToolPose MachineModel::tool_pose(const Pose& pose, const Trig& tr) const {
     return {};
 }
 
+double default_singular_tolerance() {
+    return std::sin(deg_to_rad(kDefaultSingularDeg));
+}
+
 Pose add_correction(MachineType type, const Pose& u, const std::array<double, 5>& du) {
     Pose out = u;
     out.X_mm += du[0];
@@ -223,25 +227,35 @@ Vec3 Compensator::Frame::to_machine(const Vec3& v) const {
 std::array<double, 5> Compensator::step(const Frame& f, const Vec3& dw, const Vec3& dq, int& suppressed) const {
     const Vec3* cq = f.cq;
     const Vec3* cw = f.cw;
+    const double n11 = cq[0].squaredNorm(), n22 = cq[1].squaredNorm();
     if (suppressed < 0) {
         // |cq| = |sin| of the angle between the axis and the tool axis.
         const double tol2 = options_.singular_tolerance * options_.singular_tolerance;
-        if (cq[1].squaredNorm() < tol2)
+        if (n22 <= tol2)
             suppressed = 4;
-        else if (cq[0].squaredNorm() < tol2)
+        else if (n11 <= tol2)
             suppressed = 3;
     }
     double d1 = 0, d2 = 0;
-    if (suppressed == 4) {
-        d1 = cq[0].dot(dq) / cq[0].squaredNorm();
-    } else if (suppressed == 3) {
-        d2 = cq[1].dot(dq) / cq[1].squaredNorm();
-    } else {  // least squares over the three direction components
-        const double n11 = cq[0].squaredNorm(), n12 = cq[0].dot(cq[1]), n22 = cq[1].squaredNorm();
+    if (suppressed < 0) {  // least squares over the three direction components
+        const double n12 = cq[0].dot(cq[1]);
         const double b1 = cq[0].dot(dq), b2 = cq[1].dot(dq);
-        const double inv_det = 1.0 / (n11 * n22 - n12 * n12);
-        d1 = (n22 * b1 - n12 * b2) * inv_det;
-        d2 = (n11 * b2 - n12 * b1) * inv_det;
+        const double det = n11 * n22 - n12 * n12;
+        if (det > 0) {
+            const double inv_det = 1.0 / det;
+            d1 = (n22 * b1 - n12 * b2) * inv_det;
+            d2 = (n11 * b2 - n12 * b1) * inv_det;
+        }
+        if (!(det > 0) || !(std::abs(d1) <= options_.max_rotary_step_rad) ||
+            !(std::abs(d2) <= options_.max_rotary_step_rad))
+            suppressed = n22 <= n11 ? 4 : 3;  // too near a singularity for the split
+    }
+    if (suppressed == 4) {
+        d1 = n11 > 0 ? cq[0].dot(dq) / n11 : 0.0;
+        d2 = 0;
+    } else if (suppressed == 3) {
+        d1 = 0;
+        d2 = n22 > 0 ? cq[1].dot(dq) / n22 : 0.0;
     }
     const Vec3 dp = f.to_machine(dw - cw[0] * d1 - cw[1] * d2);
     return {dp.x(), dp.y(), dp.z(), d1, d2};

@@ -36,7 +36,7 @@ LeiHsuCorrection lei_hsu_first_order(const Vec5& u, const Vec6& dv, double singu
     const double sa = std::sin(u[3]), ca = std::cos(u[3]), sc = std::sin(u[4]), cc = std::cos(u[4]);
     const double dx = dv[0], dy = dv[1], dz = dv[2], di = dv[3], dj = dv[4], dk = dv[5];
     LeiHsuCorrection out;
-    out.singular = std::abs(sa) < singular_tolerance;
+    out.singular = std::abs(sa) <= singular_tolerance;
     const double dta = ca * (sc * di + cc * dj) - sa * dk;
     const double dtc = out.singular ? 0.0 : (cc * di - sc * dj) / sa;
     out.du[0] = -cc * dx + sc * dy + (sa * zm - ca * ym) * dtc;
@@ -51,7 +51,7 @@ LeiHsuCorrection lei_hsu_exact(const LeiHsuOffsets& o, const Vec5& u, const Vec6
                                int max_iterations) {
     const Vec6 target = lei_hsu_forward(o, u) + dv;
     LeiHsuCorrection out;
-    out.singular = std::abs(std::sin(u[3])) < singular_tolerance;
+    out.singular = std::abs(std::sin(u[3])) <= singular_tolerance;
     const int n = out.singular ? 4 : 5;  // θc is the last unknown: held when singular
     out.converged = false;
     for (out.iterations = 0; out.iterations < max_iterations; ++out.iterations) {

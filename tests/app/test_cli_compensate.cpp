@@ -192,7 +192,7 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
     {
         std::ofstream broken(d.path / "broken.nc");
         broken << "%\nO0001\nG90\n";
-        for (int i = 0; i < 50000; ++i) broken << "G1 X" << i % 100 << " Y1 A30 C" << i % 360 << " F1000\n";
+        for (int i = 0; i < 50000; ++i) broken << "G1 X" << i % 100 << " Y1 Z5 A30 C" << i % 360 << " F1000\n";
         broken << "G2 X1 Y1 I1\n%\n";
     }
     std::ofstream(d.path / "keep.nc") << "precious\n";

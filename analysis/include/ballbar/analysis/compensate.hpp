@@ -61,9 +61,18 @@ class MachineModel {
     Vec3 base_ = Vec3::Zero();   // TTTRR: a_pivot + c_offset − qc; RTTTR: a_pivot − qa
 };
 
+/// The singularity tolerance `ballbar compensate` and `ballbar solve compensate` use by default: within
+/// 0.06° of a rotary axis parallel to the tool, that axis is not corrected.
+constexpr double kDefaultSingularDeg = 0.06;
+double default_singular_tolerance();  ///< sin(kDefaultSingularDeg)
+
 struct CompensationOptions {
-    /// Below this |sin(angle between a rotary axis and the tool axis)| the axis is not corrected.
+    /// At or below this |sin(angle between a rotary axis and the tool axis)| the axis is not corrected
+    /// (0 suppresses only the exactly parallel axis: never a division by zero).
     double singular_tolerance = 1e-3;
+    /// A rotary increment larger than this (rad) in one step means the pose is too near a singularity
+    /// for the least-squares split: the axis nearer parallel to the tool is then left uncorrected too.
+    double max_rotary_step_rad = 1e300;
     int max_iterations = 20;       ///< exact solution
     double tolerance_mm = 1e-12;   ///< exact solution: position match
     double tolerance_rad = 1e-14;  ///< exact solution: direction match (non-singular poses)
