@@ -190,6 +190,11 @@ void Emulator::flush_stream() {
     }
     ++counters_.stream_frames;
     emit(buf, n);
+    const double pr = config_.faults.replay_frame_probability;
+    if (pr > 0 && uniform() < pr) {
+        ++counters_.replayed_frames;
+        emit(buf, n);
+    }
 }
 
 void Emulator::produce_samples_until(std::uint64_t t_us) {
@@ -270,6 +275,9 @@ void Emulator::advance_to(std::uint64_t t_us) {
     }
     produce_samples_until(t_us);
     now_us_ = t_us;
+    // The machine's clock follows the emulator's whether or not the bar streams: motion queued now
+    // (a program, a cycle start) starts now.
+    machine_.pose_at(static_cast<double>(now_us_) * 1e-6);
     while (!delayed_.empty() && delayed_.front().release_us <= now_us_) {
         emit(delayed_.front().bytes, delayed_.front().size);
         delayed_.pop_front();

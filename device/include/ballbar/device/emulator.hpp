@@ -50,6 +50,10 @@ struct FaultConfig {
     double disconnect_at_s = -1;          ///< the link goes away at this time (< 0: never) ...
     double disconnect_s = 0;              ///< ... and comes back after this long (streaming stopped)
     double reply_delay_ms = 0;            ///< replies are sent this late
+    double replay_frame_probability = 0;  ///< a stream frame is sent twice (same sequence number)
+    // The machine's side (applied by whoever runs its programs: the demo's operator).
+    double start_delay_s = 0;  ///< each program starts this long after the operator is told to start it
+    double feed_override = 1;  ///< feed override of the machine's G1 moves (G4 dwells keep their time)
 };
 
 struct NcSource {
@@ -98,9 +102,10 @@ class Emulator : public DeviceEndpoint {
     double bar_temp_C(std::uint64_t t_us) const;
 
     struct Counters {
-        std::uint64_t samples = 0;         ///< generated while streaming
-        std::uint64_t stream_frames = 0;   ///< sent
-        std::uint64_t dropped_frames = 0;  ///< by fault injection or overrun
+        std::uint64_t samples = 0;          ///< generated while streaming
+        std::uint64_t stream_frames = 0;    ///< sent
+        std::uint64_t dropped_frames = 0;   ///< by fault injection or overrun
+        std::uint64_t replayed_frames = 0;  ///< sent twice by fault injection
         std::uint64_t corrupted_bytes = 0;
         std::uint64_t requests = 0;
         std::uint64_t invalid_host_frames = 0;
