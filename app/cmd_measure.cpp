@@ -182,10 +182,11 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
             } catch (const std::exception&) {
             }
         }
-        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " interrupted (" + sum.reason + ") after " +
-                                             std::to_string(sum.samples) + " samples; everything measured is stored" +
-                                             retry + ". Continue it with: ballbar measure --resume " +
-                                             std::to_string(id) + " --device " + o.device);
+        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " interrupted after " +
+                                             std::to_string(sum.samples) + " samples (" + sum.reason +
+                                             "); everything measured is stored" + retry +
+                                             ". Continue it with: ballbar measure --resume " + std::to_string(id) +
+                                             " --device " + o.device);
     }
     if (sum.final_state == acq::State::Done) {
         if (o.json) {

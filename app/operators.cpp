@@ -76,8 +76,9 @@ std::size_t safe_option(const acq::Choice& c) {
 }
 
 acq::PointFailureAction failure_action(std::size_t i) {
-    return i == 0 ? acq::PointFailureAction::Retry
-                  : i == 1 ? acq::PointFailureAction::Accept : acq::PointFailureAction::Abort;
+    return i == 0   ? acq::PointFailureAction::Retry
+           : i == 1 ? acq::PointFailureAction::Accept
+                    : acq::PointFailureAction::Abort;
 }
 
 const std::vector<std::string> kFailureOptions = {"retry", "accept", "abort"};
@@ -123,8 +124,8 @@ bool TerminalOperator::confirm(std::string_view, std::string_view prompt) {
 
 std::size_t TerminalOperator::choose(const acq::Choice& c) {
     end_progress_line();
-    out_ << (tty_ ? "\033[1m" : "") << c.prompt << (tty_ ? "\033[0m" : "") << "\n" << options_text(c.options) << "? "
-         << std::flush;
+    out_ << (tty_ ? "\033[1m" : "") << c.prompt << (tty_ ? "\033[0m" : "") << "\n"
+         << options_text(c.options) << "? " << std::flush;
     const auto a = read_choice(in_, out_, c.options);
     if (!a) {
         out_ << "\n";
@@ -237,8 +238,8 @@ std::size_t ScriptedTerminalOperator::choose(const acq::Choice& c) {
 
 acq::PointFailureAction ScriptedTerminalOperator::point_failed(const acq::CapturedPoint& p, std::string_view why) {
     const acq::PointFailureAction a = answers_.point_failed(p, why);
-    out_ << "point " << where(p.planned) << " failed: " << why << " [plan: "
-         << kFailureOptions[static_cast<std::size_t>(a)] << "]\n";
+    out_ << "point " << where(p.planned) << " failed: " << why
+         << " [plan: " << kFailureOptions[static_cast<std::size_t>(a)] << "]\n";
     return a;
 }
 

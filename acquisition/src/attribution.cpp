@@ -19,8 +19,8 @@ std::string seconds(std::uint64_t us) {
 
 DwellAttributor::DwellAttributor(const AttributionSettings& settings)
     : settings_(settings), data_digits_(code_data_digits(settings.point_count)), detector_(settings.dwell) {
-    const auto n = std::max<std::size_t>(5, static_cast<std::size_t>(
-                                                std::lround(settings_.plateau_window_s * settings_.sample_rate_hz)));
+    const auto n = std::max<std::size_t>(
+        5, static_cast<std::size_t>(std::lround(settings_.plateau_window_s * settings_.sample_rate_hz)));
     ring_.assign(n, 0.0);
     ring_time_.assign(n, 0);
 }
@@ -28,6 +28,7 @@ DwellAttributor::DwellAttributor(const AttributionSettings& settings)
 std::string DwellAttributor::digits_text() const {
     std::string t;
     for (int d : digits_) t += std::to_string(d);
+    for (std::size_t k = digits_.size(); k < tags_.size(); ++k) t += "?";
     return t;
 }
 
@@ -35,11 +36,12 @@ AttributionEvent DwellAttributor::reset(const std::string& why) {
     AttributionEvent ev;
     if (measuring_) {
         ev = void_measurement(why);
-    } else if (!digits_.empty()) {
+    } else if (!tags_.empty()) {
         ev.kind = AttributionEvent::Kind::Void;
         ev.evidence = "code " + digits_text() + "… not finished: " + why;
     }
     digits_.clear();
+    tags_.clear();
     head_ = count_ = since_recompute_ = 0;
     s1_ = s2_ = 0;
     in_plateau_ = false;
@@ -64,21 +66,27 @@ void DwellAttributor::close_plateau() {
     const double dur = 1e-6 * static_cast<double>(plateau_last_us_ - plateau_start_us_);
     const PointCodeSpec& c = settings_.code;
     const bool tag_time = dur >= c.min_plateau_s && dur <= c.max_plateau_s;
-    const int pos = static_cast<int>(digits_.size());
-    if (tag_time && pos <= data_digits_) {
-        if (const auto d = tag_digit(c, pos, level)) {
-            if (digits_.empty()) code_start_us_ = plateau_start_us_;
-            digits_.push_back(*d);
-            return;
-        }
+    // A tag candidate: on the side its position says, between the smallest and the largest tag offset
+    // with room for the machine's error at this point (the digits are read relative to the measuring
+    // level that follows, so an error common to the code and its dwell cancels).
+    auto candidate = [&](int pos) {
+        const double lo = settings_.measuring_level_mm;
+        const double hi = c.min_offset_mm + 2 * c.digit_step_mm + 2 * c.decision_mm;
+        const double signed_level = pos % 2 == 0 ? -level : level;
+        return tag_time && signed_level >= lo && signed_level <= hi;
+    };
+    const int pos = static_cast<int>(tags_.size());
+    if (pos <= data_digits_ && candidate(pos)) {
+        if (tags_.empty()) code_start_us_ = plateau_start_us_;
+        tags_.push_back(level);
+        return;
     }
     // Not the next tag: perhaps the first tag of a new code.
-    digits_.clear();
-    if (tag_time)
-        if (const auto d = tag_digit(c, 0, level)) {
-            code_start_us_ = plateau_start_us_;
-            digits_.push_back(*d);
-        }
+    tags_.clear();
+    if (candidate(0)) {
+        code_start_us_ = plateau_start_us_;
+        tags_.push_back(level);
+    }
 }
 
 AttributionEvent DwellAttributor::push(const analysis::BarSample& s) {
@@ -131,7 +139,8 @@ AttributionEvent DwellAttributor::push(const analysis::BarSample& s) {
         still = std::sqrt(var) <= settings_.plateau_std_mm;
     }
     bool started = false;
-    if (still && in_plateau_ && std::abs(mean - level_sum_ / static_cast<double>(level_n_)) > settings_.plateau_level_mm)
+    if (still && in_plateau_ &&
+        std::abs(mean - level_sum_ / static_cast<double>(level_n_)) > settings_.plateau_level_mm)
         close_plateau();
     if (still) {
         if (!in_plateau_) {
@@ -153,12 +162,25 @@ AttributionEvent DwellAttributor::push(const analysis::BarSample& s) {
     // A measuring plateau directly after a complete code: the named point's dwell.
     if (started && !measuring_ && std::abs(mean) <= settings_.measuring_level_mm) {
         const std::size_t expected_digits = static_cast<std::size_t>(data_digits_) + 1;
-        if (digits_.size() == expected_digits) {
-            const auto point = decode_point(digits_);
+        if (tags_.size() == expected_digits) {
+            // The digits, read relative to this dwell's level.
+            digits_.clear();
+            bool misread = false;
+            for (std::size_t k = 0; k < tags_.size(); ++k) {
+                const auto d = tag_digit(settings_.code, static_cast<int>(k), tags_[k] - mean);
+                if (!d) {
+                    misread = true;
+                    break;
+                }
+                digits_.push_back(*d);
+            }
+            const auto point = misread ? std::nullopt : decode_point(digits_);
             if (!point || *point >= settings_.point_count) {
                 ev.kind = AttributionEvent::Kind::Void;
                 ev.evidence = "code " + digits_text() + " at " + seconds(code_start_us_) +
-                              (point ? " names no point of the plan" : " fails its check digit");
+                              (misread ? " has a tag at no tag length"
+                               : point ? " names no point of the plan"
+                                       : " fails its check digit");
             } else {
                 measuring_ = point;
                 measuring_evidence_ = "code " + digits_text() + " read from " + seconds(code_start_us_) + " to " +
@@ -166,11 +188,12 @@ AttributionEvent DwellAttributor::push(const analysis::BarSample& s) {
                 detector_.reset(true);
                 if (*point < expected_mm_.size()) detector_.set_expected(expected_mm_[*point]);
             }
-        } else if (!digits_.empty()) {
+        } else if (!tags_.empty()) {
             ev.kind = AttributionEvent::Kind::Void;
             ev.evidence = "code " + digits_text() + "… incomplete before the dwell at " + seconds(plateau_start_us_);
         }
         digits_.clear();
+        tags_.clear();
     }
     if (measuring_) {
         const DwellDetector::Result r = detector_.push(s);

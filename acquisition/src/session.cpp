@@ -300,6 +300,7 @@ void Session::stream_off() {
 void Session::program_stops(const ProgramEntry& entry) {
     for (const ProgramStop& stop : entry.stops_before) {
         const std::string& what = stop.what;
+        if (!streaming_) stream_on();  // each stop follows a cycle start
         stream_off();
         if (attributor_) {
             const AttributionEvent ev = attributor_->reset("program stop");
@@ -334,7 +335,7 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
                             "in rapid; then cycle start",
                         plan_.points[points.front()].socket_mm});
         NcBlock c;
-        c.comment = "PROGRAM STOP: remove the bar before the rapid";
+        c.comment = "PROGRAM STOP: " + prog.entries.front().stops_before.front().what;
         NcBlock m;
         m.raw = "M0";
         prog.nc.blocks.insert(prog.nc.blocks.begin() + 1, {c, m});
@@ -347,6 +348,7 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
                                         std::to_string(plan_.test_count()) + " tests, program of " +
                                         std::to_string(points.size()) + " points");
     op_.run_program(prog.nc, points, retry);
+    stream_on();  // the operator started the program (cycle start)
     program_ = &prog;
     cursor_ = 0;
     struct Clear {

@@ -203,8 +203,14 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
     if (j.contains("faults")) parse_faults(j.at("faults"), c.faults);
     if (j.contains("program")) {
         const auto& pj = j.at("program");
-        only_keys(pj, "program", {"file", "text", "dialect"});
+        only_keys(pj, "program", {"file", "text", "dialect", "start"});
+
         NcSource src;
+        if (pj.contains("start")) {
+            const std::string st = str(pj, "program", "start", "");
+            if (st != "cycle_start" && st != "power_on") fail("program.start", "must be cycle_start or power_on");
+            src.power_on = st == "power_on";
+        }
         if (pj.contains("dialect")) {
             const auto d = analysis::parse_nc_dialect(str(pj, "program", "dialect", ""));
             if (!d) fail("program.dialect", "must be fanuc or linuxcnc");
@@ -216,7 +222,9 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
         } else {
             std::filesystem::path f = str(pj, "program", "file", "");
             if (f.is_relative()) f = std::filesystem::path(base_dir) / f;
-            src.text = read_file(f.string());
+            src.file = f.string();
+            // Waiting for cycle start, the file may not exist yet: the host writes it before the start.
+            if (src.power_on || std::filesystem::exists(f)) src.text = read_file(f.string());
         }
         try {
             analysis::parse_nc_program(src.text, src.dialect);  // fail now, with the line number

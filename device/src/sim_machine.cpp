@@ -129,7 +129,32 @@ void SimulatedMachine::cycle_start(double t_s) {
         pose_locked(t_s);
         h.swap(held_);
     }
-    if (h) queue_blocks(h->program, h->poses, h->next, h->feed);
+    if (!h) return;
+    // The operator did what the stop said: a socket position in its comment is where the socket is now.
+    if (h->next >= 2) {
+        const std::string& c = h->program.blocks[h->next - 2].comment;
+        for (const char* key : {"socket to [", "socket stands at ["}) {
+            const auto at = c.find(key);
+            if (at == std::string::npos) continue;
+            double v[3] = {0, 0, 0};
+            std::size_t pos = at + std::string(key).size();
+            bool ok = true;
+            for (double& x : v) {
+                try {
+                    std::size_t used = 0;
+                    x = std::stod(c.substr(pos), &used);
+                    pos += used;
+                    while (pos < c.size() && (c[pos] == ',' || c[pos] == ' ')) ++pos;
+                } catch (const std::exception&) {
+                    ok = false;
+                    break;
+                }
+            }
+            if (ok) set_socket_mm(analysis::Vec3(v[0], v[1], v[2]));
+            break;
+        }
+    }
+    queue_blocks(h->program, h->poses, h->next, h->feed);
 }
 
 void SimulatedMachine::set_feed_override(double factor) {

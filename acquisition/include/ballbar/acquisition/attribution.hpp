@@ -25,12 +25,12 @@ struct AttributionSettings {
     PointCodeSpec code;
     std::size_t point_count = 0;  ///< points of the plan (codes name plan indices)
     double sample_rate_hz = 1000;
-    double bar_length_mm = 100;         ///< the plan's bar length (the measuring level)
-    double plateau_window_s = 0.05;     ///< window of the plateau detector
-    double plateau_std_mm = 0.008;      ///< still: standard deviation over that window at most this
-    double plateau_level_mm = 0.03;     ///< a plateau's samples stay this close to its level
-    double measuring_level_mm = 0.3;    ///< |level − bar length| of a measuring dwell at most this
-    DwellSettings dwell;                ///< the averaging of the attributed dwell
+    double bar_length_mm = 100;       ///< the plan's bar length (the measuring level)
+    double plateau_window_s = 0.05;   ///< window of the plateau detector
+    double plateau_std_mm = 0.008;    ///< still: standard deviation over that window at most this
+    double plateau_level_mm = 0.03;   ///< a plateau's samples stay this close to its level
+    double measuring_level_mm = 0.3;  ///< |level − bar length| of a measuring dwell at most this
+    DwellSettings dwell;              ///< the averaging of the attributed dwell
 };
 
 /// What one pushed sample concluded.
@@ -78,6 +78,7 @@ class DwellAttributor {
     std::uint64_t plateau_start_us_ = 0, plateau_last_us_ = 0;
     std::optional<std::uint64_t> last_time_us_;
     // The code being read and the dwell being averaged.
+    std::vector<double> tags_;  ///< levels of the tag plateaus read so far
     std::vector<int> digits_;
     std::uint64_t code_start_us_ = 0;
     std::optional<std::size_t> measuring_;

@@ -18,13 +18,13 @@
 namespace ballbar::acquisition {
 
 struct PointCodeSpec {
-    double tag_dwell_s = 0.3;        ///< G4 at each tag length
-    double min_offset_mm = 0.45;     ///< |offset| of digit 0
-    double digit_step_mm = 0.2;      ///< offset between successive digits
-    double decision_mm = 0.08;       ///< a plateau further than this from every tag level is no tag
-    double min_plateau_s = 0.15;     ///< a tag plateau lasts at least this ...
-    double max_plateau_s = 1.0;      ///< ... and at most this (a machine standing still is no tag)
-    double max_gap_s = 0.1;          ///< a gap in the stream longer than this voids the code being read
+    double tag_dwell_s = 0.3;     ///< G4 at each tag length
+    double min_offset_mm = 0.45;  ///< |offset| of digit 0
+    double digit_step_mm = 0.2;   ///< offset between successive digits
+    double decision_mm = 0.08;    ///< a plateau further than this from every tag level is no tag
+    double min_plateau_s = 0.15;  ///< a tag plateau lasts at least this ...
+    double max_plateau_s = 1.0;   ///< ... and at most this (a machine standing still is no tag)
+    double max_gap_s = 0.1;       ///< a gap in the stream longer than this voids the code being read
 };
 
 /// Data digits for a plan of `point_count` points (at least 2).

@@ -59,13 +59,19 @@ struct FaultConfig {
 struct NcSource {
     std::string text;
     analysis::NcDialect dialect = analysis::NcDialect::Fanuc;
+    /// Runs from power-on (true), or waits for cycle start (false): each Start request of the host is
+    /// the operator's cycle start (docs/emulator.md).
+    bool power_on = false;
+    /// When set, the program is read again from this file at a cycle start that begins a program (the
+    /// operator loaded a new one); a missing or unreadable file keeps the last text.
+    std::string file;
 };
 
 struct EmulatorConfig {
     std::uint64_t seed = 1;
     InstrumentModel instrument;
     MachineSetup machine;
-    std::optional<NcSource> program;  ///< run from power-on
+    std::optional<NcSource> program;  ///< the machine's program (power-on or cycle start)
     FaultConfig faults;
 };
 
@@ -106,6 +112,8 @@ class Emulator : public DeviceEndpoint {
         std::uint64_t stream_frames = 0;    ///< sent
         std::uint64_t dropped_frames = 0;   ///< by fault injection or overrun
         std::uint64_t replayed_frames = 0;  ///< sent twice by fault injection
+        std::uint64_t cycle_starts = 0;     ///< host Start requests taken as cycle start
+        std::uint64_t programs_started = 0;
         std::uint64_t corrupted_bytes = 0;
         std::uint64_t requests = 0;
         std::uint64_t invalid_host_frames = 0;
@@ -119,6 +127,7 @@ class Emulator : public DeviceEndpoint {
         std::size_t size;
     };
     void handle(const protocol::FrameView& frame);
+    void cycle_start();
     void reply(const protocol::FrameBuffer& buf, std::size_t n);
     void emit(const protocol::FrameBuffer& buf, std::size_t n);
     void produce_samples_until(std::uint64_t t_us);
@@ -154,6 +163,8 @@ class Emulator : public DeviceEndpoint {
     protocol::StreamFrame pending_{};
     std::uint64_t pending_first_us_ = 0;
     Counters counters_;
+    bool program_started_ = false;
+    std::string loaded_program_;
 };
 
 }  // namespace ballbar::device

@@ -64,7 +64,14 @@ class SimulatedMachine {
     /// A program stop (M0/M00/M1/M01) holds the rest of the program until the operator presses cycle
     /// start: true while the machine waits at one at `t_s`.
     bool at_program_stop(double t_s);
-    /// Cycle start: the held rest of the program runs from `t_s` (no effect when nothing is held).
+    /// A program's rest is held at a program stop (reached or still ahead of the machine).
+    bool holding() const {
+        std::lock_guard lock(mutex_);
+        return held_.has_value();
+    }
+    /// Cycle start: the held rest of the program runs from `t_s` (no effect when nothing is held). When
+    /// the comment before the stop says where the socket goes ("socket to [x, y, z]" or "socket
+    /// stands at [x, y, z]"), the emulated operator has put it there.
     void cycle_start(double t_s);
     /// Feed override (1 = 100 %) applied to G1 moves queued from now on; G4 dwells keep their time.
     void set_feed_override(double factor);
