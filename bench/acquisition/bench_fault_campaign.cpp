@@ -17,15 +17,16 @@ int main(int argc, char** argv) {
         std::vector<ballbar::acquisition::TransitionRecord> log;
         ballbar::acquisition::testing::run_campaign_session(seed, one, &log);
         for (const auto& t : log)
-            std::printf("%s -> %s %s: %s\n", std::string(to_string(t.from)).c_str(), std::string(to_string(t.to)).c_str(),
-                        std::string(to_string(t.event)).c_str(), t.detail.c_str());
+            std::printf("%s -> %s %s: %s\n", std::string(to_string(t.from)).c_str(),
+                        std::string(to_string(t.to)).c_str(), std::string(to_string(t.event)).c_str(),
+                        t.detail.c_str());
         return 0;
     }
     const auto t0 = std::chrono::steady_clock::now();
     const auto f = ballbar::acquisition::testing::run_campaign(sessions, seed);
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("sessions                          %d (done %d, interrupted with an exact retry list %d)\n",
-                f.sessions, f.done, f.interrupted_with_exact_retry);
+    std::printf("sessions                          %d (done %d, interrupted with an exact retry list %d)\n", f.sessions,
+                f.done, f.interrupted_with_exact_retry);
     std::printf("points stored                     %zu\n", f.points_stored);
     std::printf("points stored at a wrong pose     %zu\n", f.wrong_pose);
     std::printf("sessions not finished             %d\n", f.not_finished);

@@ -27,9 +27,9 @@ struct CampaignFigures {
     int interrupted_with_exact_retry = 0;  ///< ended resumable, `missing` = exactly the points not stored
     int not_finished = 0;                  ///< anything else (must be 0)
     std::size_t points_stored = 0;
-    std::size_t wrong_pose = 0;     ///< stored points whose window was not at the planned pose (must be 0)
-    std::size_t stored_twice = 0;   ///< samples stored twice (must be 0)
-    std::size_t faults = 0;         ///< disconnects injected
+    std::size_t wrong_pose = 0;          ///< stored points whose window was not at the planned pose (must be 0)
+    std::size_t stored_twice = 0;        ///< samples stored twice (must be 0)
+    std::size_t faults = 0;              ///< disconnects injected
     std::size_t max_lost_per_fault = 0;  ///< samples delivered by the source but not stored, per fault
     std::size_t void_dwells = 0, programs = 0, dropped_samples = 0, replayed_samples = 0;
     double max_position_error_um = 0;  ///< done sessions: |measured − true| of SSM's e, worst location
@@ -38,8 +38,7 @@ struct CampaignFigures {
     std::string interrupted_reasons;
 };
 
-inline void run_campaign_session(std::uint64_t seed, CampaignFigures& f,
-                                 std::vector<TransitionRecord>* log = nullptr) {
+inline void run_campaign_session(std::uint64_t seed, CampaignFigures& f, std::vector<TransitionRecord>* log = nullptr) {
     std::mt19937_64 rng(seed);
     auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
     const analysis::MachineType types[] = {analysis::MachineType::RRTTT, analysis::MachineType::TTTRR,
@@ -119,16 +118,17 @@ inline void run_campaign_session(std::uint64_t seed, CampaignFigures& f,
         for (std::size_t t = 0; t < truth.size() && 2 * t + 1 < sink.locations.size(); ++t) {
             const auto& l1 = sink.locations[sink.locations.size() - 2 * truth.size() + 2 * t];
             const auto& l2 = sink.locations[sink.locations.size() - 2 * truth.size() + 2 * t + 1];
-            f.max_position_error_um = std::max(
-                {f.max_position_error_um, 1e3 * (l1.ssm.exact_mm - truth[t].e1_mm).norm(),
-                 1e3 * (l2.ssm.exact_mm - truth[t].e2_mm).norm()});
+            f.max_position_error_um =
+                std::max({f.max_position_error_um, 1e3 * (l1.ssm.exact_mm - truth[t].e1_mm).norm(),
+                          1e3 * (l2.ssm.exact_mm - truth[t].e2_mm).norm()});
             const auto& got = sink.tests[sink.tests.size() - truth.size() + t].orientation;
             const auto& want = truth[t].result.orientation;
             if (got.exact && want.exact)
-                f.max_angle_error_arcsec = std::max(
-                    {f.max_angle_error_arcsec, analysis::rad_to_arcsec(std::abs(got.exact->d_alpha_rad - want.exact->d_alpha_rad)),
-                     analysis::rad_to_arcsec(std::abs(got.exact->d_beta_rad - want.exact->d_beta_rad)),
-                     analysis::rad_to_arcsec(std::abs(got.exact->d_gamma_rad - want.exact->d_gamma_rad))});
+                f.max_angle_error_arcsec =
+                    std::max({f.max_angle_error_arcsec,
+                              analysis::rad_to_arcsec(std::abs(got.exact->d_alpha_rad - want.exact->d_alpha_rad)),
+                              analysis::rad_to_arcsec(std::abs(got.exact->d_beta_rad - want.exact->d_beta_rad)),
+                              analysis::rad_to_arcsec(std::abs(got.exact->d_gamma_rad - want.exact->d_gamma_rad))});
         }
     } else if (sum.interrupted) {
         std::set<std::size_t> expect_missing;

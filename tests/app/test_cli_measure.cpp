@@ -160,6 +160,56 @@ TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
     EXPECT_TRUE(fs::exists(prog));
 }
 
+/// docs/procedure.md's two commands, in two processes: `ballbar emulate --pty --config …` and
+/// `ballbar measure --device serial:PTY …` (with --non-interactive), to a completed session.
+TEST(CliMeasure, TheDocumentedTwoProcessCommandsCompleteASession) {
+    const fs::path dir = temp_dir();
+    const fs::path db = dir / "two-process.db";
+    fs::remove(db);
+    fs::remove("/tmp/ballbar-session.nc");
+    const std::string exe = BALLBAR_EXE;
+    const std::string cfg = (kData / "tttrr-emulator-measure.json").string();
+    int outfd[2];
+    ASSERT_EQ(::pipe(outfd), 0);
+    const pid_t emu = ::fork();
+    ASSERT_GE(emu, 0);
+    if (emu == 0) {
+        ::dup2(outfd[1], STDOUT_FILENO);
+        ::close(outfd[0]);
+        ::execl(exe.c_str(), exe.c_str(), "emulate", "--pty", "--config", cfg.c_str(), static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    ::close(outfd[1]);
+    std::string line;
+    char c = 0;
+    while (::read(outfd[0], &c, 1) == 1 && c != '\n') line += c;
+    ASSERT_EQ(line.rfind("/dev/pts/", 0), 0u) << line;
+    std::string out;
+    const int code = run("--db " + db.string() + " measure --non-interactive --device serial:" + line + " --machine " +
+                             (kData / "tttrr.json").string() + " --plan " + (kData / "tttrr-quick.plan.json").string() +
+                             " --program /tmp/ballbar-session.nc",
+                         &out);
+    ::kill(emu, SIGINT);
+    int st = 0;
+    ::waitpid(emu, &st, 0);
+    ::close(outfd[0]);
+    EXPECT_EQ(code, 0) << out;
+    EXPECT_NE(out.find("Program stop (M0): mount the bar"), std::string::npos) << out;
+    EXPECT_NE(out.find("completed"), std::string::npos) << out;
+    EXPECT_NE(out.find("1 program)"), std::string::npos) << "no retry needed: " << out;
+}
+
+TEST(CliMeasure, ADefaultPlanWithTheEmulatorsDefaultBarIsRefusedBeforeAnyQuestion) {
+    const fs::path dir = temp_dir();
+    std::string out;
+    const int code = run("--db " + (dir / "mismatch.db").string() + " measure --device emulator: --machine " +
+                             (kData / "tttrr.json").string(),
+                         &out);
+    EXPECT_EQ(code, 1) << out;
+    EXPECT_NE(out.find("\"bar_length_mm\": 150.000"), std::string::npos) << "names the fix: " << out;
+    EXPECT_EQ(out.find("calibrator"), std::string::npos) << "nothing asked first: " << out;
+}
+
 TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
     const fs::path dir = temp_dir();
     fs::remove(dir / "b.nc");
