@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <tuple>
@@ -94,7 +95,9 @@ class DemoFaults : public ::testing::TestWithParam<std::tuple<const char*, const
 
 TEST_P(DemoFaults, RecoversTheErrorsUnderFaults) {
     const auto [type, faults] = GetParam();
-    const auto db = temp_db(std::string(type) + "-faults.db");
+    // One database per case: ctest runs the cases in parallel.
+    const auto db =
+        temp_db(std::string(type) + "-faults-" + std::to_string(std::hash<std::string>{}(faults) % 100000) + ".db");
     const DemoRun r =
         run("--db " + db.string() + " demo --json --seed 4 --machine " + type + " --faults '" + faults + "'");
     ASSERT_EQ(r.status, 0) << r.out;
