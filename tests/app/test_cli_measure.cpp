@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -208,6 +209,39 @@ TEST(CliMeasure, ADefaultPlanWithTheEmulatorsDefaultBarIsRefusedBeforeAnyQuestio
     EXPECT_EQ(code, 1) << out;
     EXPECT_NE(out.find("\"bar_length_mm\": 150.000"), std::string::npos) << "names the fix: " << out;
     EXPECT_EQ(out.find("calibrator"), std::string::npos) << "nothing asked first: " << out;
+}
+
+TEST(CliMeasure, JsonGivesTheOperatorsEventsAsJsonLines) {
+    const fs::path dir = temp_dir();
+    fs::remove(dir / "j.nc");
+    const fs::path cfg = emulator_config(dir, dir / "j.nc");
+    const fs::path db = dir / "json.db";
+    fs::remove(db);
+    std::string out;
+    const int code = run("--db " + db.string() + " measure --json --non-interactive --device emulator:" + cfg.string() +
+                             " --machine " + (kData / "tttrr.json").string() + " --plan " +
+                             (kData / "tttrr-quick.plan.json").string() + " --program " + (dir / "j.nc").string(),
+                         &out);
+    EXPECT_EQ(code, 0) << out;
+    int points = 0, stops = 0, programs = 0, done = 0;
+    std::istringstream lines(out);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.empty() || line[0] != '{') continue;  // the session line
+        const auto j = nlohmann::json::parse(line);
+        const std::string ev = j.at("event");
+        if (ev == "point") {
+            ++points;
+            EXPECT_GT(j.at("std_um").get<double>(), 0.0) << line;
+            EXPECT_NE(j.at("evidence").get<std::string>().find("code "), std::string::npos) << line;
+        }
+        stops += ev == "program_stop";
+        programs += ev == "run_program";
+        done += ev == "done";
+    }
+    EXPECT_EQ(points, 6) << out;
+    EXPECT_EQ(stops, 1) << out;
+    EXPECT_EQ(programs, 1) << out;
+    EXPECT_EQ(done, 1) << out;
 }
 
 TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
