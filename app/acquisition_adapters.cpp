@@ -56,9 +56,29 @@ void DeviceSource::set_reference() {
 }
 
 void DeviceSource::start() {
+    if (!inst_) throw SourceError("the instrument is not connected");
     try {
         inst_->start_streaming();
     } catch (const device::DeviceError& e) {
+        if (e.kind() == device::DeviceErrorKind::Disconnected) {
+            lost_frames_ += inst_->stats().lost_frames;
+            inst_.reset();  // the next read reports the disconnect
+            return;
+        }
+        throw SourceError(e.what());
+    }
+}
+
+void DeviceSource::stop() {
+    if (!inst_) return;
+    try {
+        inst_->stop_streaming();
+    } catch (const device::DeviceError& e) {
+        if (e.kind() == device::DeviceErrorKind::Disconnected || e.kind() == device::DeviceErrorKind::Timeout) {
+            lost_frames_ += inst_->stats().lost_frames;
+            inst_.reset();  // the next read reports the disconnect
+            return;
+        }
         throw SourceError(e.what());
     }
 }
@@ -93,8 +113,7 @@ bool DeviceSource::reconnect(std::chrono::milliseconds timeout) {
         const acq::InstrumentStatus s = open_and_identify();
         (void)s;
         inst_->configure(rate_hz_, 1);
-        inst_->start_streaming();
-        return true;
+        return true;  // not streaming: the session re-references the instrument first
     } catch (const device::DeviceError& e) {
         inst_.reset();
         if (e.kind() == device::DeviceErrorKind::Permission) throw SourceError(e.what());
@@ -234,14 +253,17 @@ acq::Plan load_plan(storage::Store& store, std::int64_t session_id) {
 
 std::vector<acq::CapturedPoint> load_points(storage::Store& store, std::int64_t session_id, const acq::Plan& plan) {
     std::vector<acq::CapturedPoint> out;
+    std::vector<std::size_t> at(plan.points.size(), plan.points.size());
     for (const auto& r : store.points(session_id)) {
-        const std::size_t i = out.size();
-        if (i >= plan.points.size()) throw acq::PlanError("session has more points than its plan");
-        const acq::PlannedPoint& pp = plan.points[i];
-        if (r.reading.location != 2 * pp.test + (pp.step - 1) || r.reading.point != pp.point)
-            throw acq::PlanError("stored point " + std::to_string(i) + " does not match the plan's order");
+        // Points are stored where their code put them (any order): find each one's planned place.
+        const int location = r.reading.location;
+        const int test = location / 2, step = location % 2 + 1;
+        if (test < 0 || test >= plan.test_count() || r.reading.point < 0 || r.reading.point >= plan.points_per_step)
+            throw acq::PlanError("stored point (location " + std::to_string(location) + ", point " +
+                                 std::to_string(r.reading.point) + ") is not in the session's plan");
+        const std::size_t i = plan.index(test, step, r.reading.point);
         acq::CapturedPoint c;
-        c.planned = pp;
+        c.planned = plan.points[i];
         c.measured_mm = r.reading.measured_mm;
         c.std_mm = r.reading.std_mm.value_or(0);
         c.n = static_cast<std::size_t>(r.reading.n);
@@ -249,91 +271,14 @@ std::vector<acq::CapturedPoint> load_points(storage::Store& store, std::int64_t 
         c.last_seq = r.last_seq.value_or(0);
         c.time_s = r.reading.time_s;
         c.bar_temp_C = r.reading.bar_temp_C.value_or(20);
-        out.push_back(c);
+        if (at[i] < out.size()) {
+            out[at[i]] = c;  // measured again (rejected results): the latest counts
+        } else {
+            at[i] = out.size();
+            out.push_back(c);
+        }
     }
     return out;
-}
-
-// ---- TerminalOperator ------------------------------------------------------------------------------
-
-TerminalOperator::TerminalOperator(std::istream& in, std::ostream& out, bool color, const acq::Plan& plan,
-                                   std::string program_path)
-    : in_(in), out_(out), color_(color), plan_(plan), program_path_(std::move(program_path)) {}
-
-void TerminalOperator::end_progress_line() {
-    if (progress_line_) out_ << '\n';
-    progress_line_ = false;
-}
-
-bool TerminalOperator::confirm(std::string_view, std::string_view prompt) {
-    end_progress_line();
-    out_ << (color_ ? "\033[1m" : "") << prompt << (color_ ? "\033[0m" : "") << " [Y/n] " << std::flush;
-    std::string line;
-    if (!std::getline(in_, line)) {
-        out_ << "\n";
-        return false;
-    }
-    return line.empty() || line[0] == 'y' || line[0] == 'Y';
-}
-
-void TerminalOperator::message(std::string_view text) {
-    end_progress_line();
-    out_ << (color_ ? "\033[36m" : "") << text << (color_ ? "\033[0m" : "") << '\n' << std::flush;
-}
-
-acq::PointFailureAction TerminalOperator::point_failed(const acq::CapturedPoint& p, std::string_view why) {
-    end_progress_line();
-    out_ << (color_ ? "\033[31m" : "") << "Point test " << p.planned.test + 1 << " step " << p.planned.step << " point "
-         << p.planned.point + 1 << " failed: " << why << (color_ ? "\033[0m" : "") << "\n[r]etry, [a]ccept or a[b]ort? "
-         << std::flush;
-    std::string line;
-    if (!std::getline(in_, line)) return acq::PointFailureAction::Abort;
-    if (!line.empty() && line[0] == 'a') return acq::PointFailureAction::Accept;
-    if (!line.empty() && line[0] == 'b') return acq::PointFailureAction::Abort;
-    return acq::PointFailureAction::Retry;
-}
-
-void TerminalOperator::wait_at_point(const acq::PlannedPoint& p) {
-    end_progress_line();
-    out_ << "Move to test " << p.test + 1 << " step " << p.step << " point " << p.point + 1 << " (X " << p.pose.X_mm
-         << " Y " << p.pose.Y_mm << " Z " << p.pose.Z_mm << ") and press Enter when the machine stands. " << std::flush;
-    std::string line;
-    std::getline(in_, line);
-}
-
-void TerminalOperator::progress(const acq::Progress& p) {
-    constexpr int kWidth = 30;
-    const double frac = p.total ? static_cast<double>(p.done) / static_cast<double>(p.total) : 0;
-    const int filled = static_cast<int>(frac * kWidth);
-    std::ostringstream os;
-    os << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
-       << std::string(static_cast<std::size_t>(kWidth - filled), '.') << "] " << p.done << "/" << p.total << "  test "
-       << p.test + 1 << " step " << p.step << " point " << p.point + 1 << "  bar ";
-    os.setf(std::ios::fixed);
-    os.precision(4);
-    const double dev_um = (p.live_mm - p.expected_mm) * 1e3;
-    const bool near = std::abs(dev_um) < 500;
-    os << (color_ ? (near ? "\033[32m" : "\033[33m") : "") << p.live_mm << " mm" << (color_ ? "\033[0m" : "");
-    os.precision(1);
-    os << " (" << (dev_um >= 0 ? "+" : "") << dev_um << " µm)";
-    if (p.fill > 0) os << " averaging " << static_cast<int>(p.fill * 100) << "%";
-    os << "   ";
-    out_ << os.str() << std::flush;
-    progress_line_ = true;
-}
-
-void TerminalOperator::run_program(std::size_t from_point) {
-    end_progress_line();
-    const acq::PlannedPoint& p = plan_.points[from_point];
-    std::string where = "test " + std::to_string(p.test + 1) + " step " + std::to_string(p.step) + " point " +
-                        std::to_string(p.point + 1);
-    if (!program_path_.empty()) {
-        std::ofstream f(program_path_);
-        f << acq::write_plan_program(plan_, from_point);
-        if (!f) throw SourceError("cannot write the NC program to " + program_path_);
-        out_ << "NC program written to " << program_path_ << ". ";
-    }
-    out_ << "Start the NC program on the machine now (from " << where << ")." << std::endl;
 }
 
 }  // namespace ballbar::app

@@ -29,6 +29,7 @@ class DeviceSource : public acquisition::SampleSource {
     acquisition::InstrumentStatus connect() override;
     void set_reference() override;
     void start() override;
+    void stop() override;
     acquisition::ReadStatus read(std::span<analysis::BarSample> out, std::size_t& n,
                                  std::chrono::milliseconds timeout) override;
     bool reconnect(std::chrono::milliseconds timeout) override;
@@ -82,29 +83,5 @@ std::vector<acquisition::CapturedPoint> load_points(storage::Store& store, std::
 /// The session's results as JSON (kinds "ssm" / "orientation").
 std::string location_json(const acquisition::LocationResult& r);
 std::string test_json(const acquisition::TestResult& r);
-
-/// The operator at a terminal: prompts on `out`, answers from `in`; a progress bar with the live bar
-/// reading; colour only when `color`. `run_program` asks the operator to start the NC program and writes
-/// it to `program_path` (when set).
-class TerminalOperator : public acquisition::Operator {
-  public:
-    TerminalOperator(std::istream& in, std::ostream& out, bool color, const acquisition::Plan& plan,
-                     std::string program_path);
-    bool confirm(std::string_view what, std::string_view prompt) override;
-    void message(std::string_view text) override;
-    acquisition::PointFailureAction point_failed(const acquisition::CapturedPoint& p, std::string_view why) override;
-    void wait_at_point(const acquisition::PlannedPoint& p) override;
-    void progress(const acquisition::Progress& p) override;
-    void run_program(std::size_t from_point) override;
-
-  private:
-    void end_progress_line();
-    std::istream& in_;
-    std::ostream& out_;
-    bool color_;
-    const acquisition::Plan& plan_;
-    std::string program_path_;
-    bool progress_line_ = false;
-};
 
 }  // namespace ballbar::app

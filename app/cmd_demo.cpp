@@ -49,16 +49,31 @@ struct DemoOptions {
     std::string report;      ///< --report PATH: write the session's PDF report
     std::string instrument;  ///< --instrument KIND: a digital gauge instead of the ballbar (gauge_demo.cpp)
     double gauge_rate_hz = 20;
+    std::string faults;  ///< --faults SPEC
 };
 
-/// Answers every question with yes and drives the emulator's machine when the program should run.
+/// Answers every question like the plan and drives the emulator's machine as its operator would: runs
+/// each program it is told to start (late, at a feed override, when the faults say so), presses cycle
+/// start at every program stop and moves the socket when the stop says so.
 class DemoOperator : public acq::ScriptedOperator {
   public:
-    DemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, bool show_progress)
-        : acq::ScriptedOperator(plan.spec.answers), plan_(plan), machine_(machine), show_(show_progress) {}
-    void run_program(std::size_t from_point) override {
+    DemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, bool show_progress, double start_delay_s,
+                 double feed_override)
+        : acq::ScriptedOperator(plan.spec.answers),
+          machine_(machine),
+          show_(show_progress),
+          start_delay_s_(start_delay_s),
+          feed_override_(feed_override) {}
+    void run_program(const ba::NcProgram& program, std::span<const std::size_t>, bool) override {
         machine_.stop(0);  // stops wherever it is now
-        machine_.run_program(acq::make_nc_program(plan_, from_point));
+        machine_.set_feed_override(feed_override_);
+        if (start_delay_s_ > 0) machine_.dwell(start_delay_s_);
+        machine_.run_program(program);
+        ++programs;
+    }
+    void program_stop(const acq::ProgramStop& stop) override {
+        if (stop.socket_mm) machine_.set_socket_mm(*stop.socket_mm);
+        machine_.cycle_start(0);  // the rest runs once the machine stands at the stop
     }
     void progress(const acq::Progress& p) override {
         if (!show_ || p.done == last_done_) return;
@@ -72,13 +87,26 @@ class DemoOperator : public acq::ScriptedOperator {
     ~DemoOperator() override {
         if (show_) std::fputc('\n', stderr);
     }
+    int programs = 0;
 
   private:
-    const acq::Plan& plan_;
     device::SimulatedMachine& machine_;
     bool show_;
+    double start_delay_s_, feed_override_;
     std::size_t last_done_ = static_cast<std::size_t>(-1);
 };
+
+/// --faults SPEC: the emulator's "faults" object, inline JSON or a file holding it.
+device::FaultConfig parse_faults(const std::string& spec) {
+    std::string text = spec;
+    const auto first = spec.find_first_not_of(" \t\n");
+    if (first == std::string::npos || spec[first] != '{') text = read_file(spec, "faults file");
+    try {
+        return device::parse_emulator_config("{\"faults\": " + text + "}").faults;
+    } catch (const std::invalid_argument& e) {
+        throw CliError(kExitUsage, std::string("--faults: ") + e.what());
+    }
+}
 
 /// The emulator on a pty, served by a thread until destroyed.
 class PtyEmulator {
@@ -170,6 +198,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     cfg.machine.errors = acq::demo_errors(*type);
     cfg.machine.socket_mm = plan.points.front().socket_mm;
     cfg.machine.start = plan.points.front().pose;
+    if (!o.faults.empty()) cfg.faults = parse_faults(o.faults);
     PtyEmulator emulator(cfg);
 
     // A killed demo loses at most its last batch; the demo does not need an fsync per commit.
@@ -198,7 +227,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
                   << " two-step tests, " << plan.points.size() << " points; emulator on " << emulator.path() << "\n";
     DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
     StoreSink sink(store, id, plan);
-    DemoOperator op(plan, emulator.emulator().machine(), show);
+    DemoOperator op(plan, emulator.emulator().machine(), show, cfg.faults.start_delay_s, cfg.faults.feed_override);
     acq::Session session(plan, source, sink, op);
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);
@@ -247,6 +276,9 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
              {"true_first_order_rad", angles_json(t.result.orientation.first_order, *type, r.kind)}});
     }
     out["samples"] = sum.samples;
+    out["programs"] = sum.programs;
+    out["void_dwells"] = sum.void_dwells;
+    out["pauses"] = sum.pauses;
 
     int code = kExitOk;
     std::string compensation_text;  // printed after the session's tables
@@ -339,6 +371,8 @@ BALLBAR_COMMAND(demo) {
         ->check(CLI::IsMember({"ballbar", "sylvac", "mitutoyo-itn", "digimatic", "modbus"}));
     sub->add_option("--rate", o->gauge_rate_hz, "The gauge's readings per second (--instrument)")
         ->check(CLI::Range(5.0, 1000.0));
+    sub->add_option("--faults", o->faults,
+                    "Emulator faults (its \"faults\" object, docs/emulator.md): inline JSON or a file");
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });
 }
 

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "acquisition_adapters.hpp"
@@ -18,6 +19,7 @@
 #include "command.hpp"
 #include "gauge_source.hpp"
 #include "interrupt.hpp"
+#include "operators.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -34,49 +36,48 @@ struct MeasureOptions {
     std::string program_file;
     bool non_interactive = false;
     bool dry_run = false;
+    bool json = false;
     std::size_t from_point = 0;
 };
 
-/// Plan-file answers, with the prompts and progress written to `out` line by line (logs, CI).
-class ScriptedTerminalOperator : public TerminalOperator {
-  public:
-    ScriptedTerminalOperator(std::ostream& out, const acq::Plan& plan, std::string program)
-        : TerminalOperator(empty_, out, false, plan, std::move(program)), out_(out), answers_(plan.spec.answers) {}
-    bool confirm(std::string_view what, std::string_view prompt) override {
-        const bool yes = acq::ScriptedOperator(answers_).confirm(what, prompt);
-        out_ << prompt << " [plan: " << (yes ? "yes" : "no") << "]\n";
-        return yes;
-    }
-    acq::PointFailureAction point_failed(const acq::CapturedPoint& p, std::string_view why) override {
-        out_ << "point test " << p.planned.test + 1 << " step " << p.planned.step << " point " << p.planned.point + 1
-             << " failed: " << why << "\n";
-        return answers_.on_point_failure;
-    }
-    void wait_at_point(const acq::PlannedPoint&) override {}
-    void progress(const acq::Progress& p) override {
-        if (p.done == last_) return;
-        last_ = p.done;
-        out_ << "captured " << p.done << "/" << p.total << "\n" << std::flush;
-    }
+/// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm"
+std::string vec_um(const ba::Vec3& v_mm, const ba::Vec3& std_mm) {
+    std::ostringstream os;
+    os.setf(std::ios::fixed);
+    os.precision(2);
+    os << "(" << v_mm.x() * 1e3 << ", " << v_mm.y() * 1e3 << ", " << v_mm.z() * 1e3 << ")";
+    if (std_mm.norm() > 0)
+        os << " ± (" << std_mm.x() * 1e3 << ", " << std_mm.y() * 1e3 << ", " << std_mm.z() * 1e3 << ")";
+    os << " µm";
+    return os.str();
+}
 
-  private:
-    std::istringstream empty_;
-    std::ostream& out_;
-    acq::Answers answers_;
-    std::size_t last_ = static_cast<std::size_t>(-1);
-};
-
-void print_results(std::ostream& out, const acq::SessionSummary& sum) {
+void print_results(std::ostream& out, const acq::Plan& plan, const acq::SessionSummary& sum) {
+    const ba::MachineType type = plan.machine.geometry.type;
     for (const auto& t : sum.tests) {
-        out << "test " << t.test + 1 << " (" << acq::to_string(t.kind) << "): ΔV1 [µm] " << (t.dV1_mm * 1e3).transpose()
-            << ", ΔV2 [µm] " << (t.dV2_mm * 1e3).transpose() << "\n";
-        if (t.orientation.exact) {
-            const auto& e = *t.orientation.exact;
-            out << "  orientation (exact) [arcsec]: Δα " << ba::rad_to_arcsec(e.d_alpha_rad) << "  Δβ "
-                << ba::rad_to_arcsec(e.d_beta_rad) << "  Δγ " << ba::rad_to_arcsec(e.d_gamma_rad) << "\n";
-        } else {
+        out << "test " << t.test + 1 << " (" << acq::to_string(t.kind) << "):\n  ΔV1 " << vec_um(t.dV1_mm, t.dV1_std_mm)
+            << "\n  ΔV2 " << vec_um(t.dV2_mm, t.dV2_std_mm) << "\n";
+        if (!t.orientation.exact) {
             out << "  orientation: " << t.orientation.singular << "\n";
+            continue;
         }
+        const auto& e = *t.orientation.exact;
+        std::ostringstream os;
+        os.setf(std::ios::fixed);
+        os.precision(2);
+        auto ang = [&](const char* name, double v, std::optional<double> sd) {
+            os << "  " << name << " " << ba::rad_to_arcsec(v) << "″";
+            if (sd) os << " ± " << ba::rad_to_arcsec(*sd) << "″";
+        };
+        const bool rtttr = type == ba::MachineType::RTTTR;
+        os << "  orientation (exact):";
+        if (!rtttr || t.kind == acq::TestKind::TableAlpha)
+            ang("Δα", e.d_alpha_rad, t.std_rad ? std::optional(t.std_rad->d_alpha_rad) : std::nullopt);
+        if (type == ba::MachineType::RRTTT || (rtttr && t.kind == acq::TestKind::SpindleBeta))
+            ang("Δβ", e.d_beta_rad, t.std_rad ? std::optional(t.std_rad->d_beta_rad) : std::nullopt);
+        if (type == ba::MachineType::TTTRR)
+            ang("Δγ", e.d_gamma_rad, t.std_rad ? std::optional(t.std_rad->d_gamma_rad) : std::nullopt);
+        out << os.str() << "\n";
     }
 }
 
@@ -163,7 +164,9 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         o.program_file.empty() ? "ballbar-session-" + std::to_string(id) + ".nc" : o.program_file;
 
     std::unique_ptr<acq::Operator> op;
-    if (o.non_interactive)
+    if (o.json)
+        op = std::make_unique<JsonOperator>(std::cin, std::cout, o.non_interactive, plan, program);
+    else if (o.non_interactive)
         op = std::make_unique<ScriptedTerminalOperator>(std::cout, plan, program);
     else
         op = std::make_unique<TerminalOperator>(std::cin, std::cout, globals.color, plan, program);
@@ -190,15 +193,34 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     session.restore(done);
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);
-    if (sum.interrupted)
+    if (sum.interrupted) {
+        std::string retry;
+        if (!sum.missing.empty()) {
+            // The program for exactly the missing points, for the operator to look at (resume writes it
+            // again, with the program stop before its rapid).
+            const std::string path = "ballbar-session-" + std::to_string(id) + "-retry.nc";
+            try {
+                write_program_file(path, acq::make_measuring_program(plan, sum.missing).nc);
+                retry = "; the " + std::to_string(sum.missing.size()) + " missing points' program is " + path;
+            } catch (const std::exception&) {
+            }
+        }
         throw CliError(kExitInterrupted, "session " + std::to_string(id) + " interrupted after " +
-                                             std::to_string(sum.samples) +
-                                             " samples; everything measured is stored. Continue it with: ballbar "
-                                             "measure --resume " +
-                                             std::to_string(id) + " --device " + o.device);
+                                             std::to_string(sum.samples) + " samples (" + sum.reason +
+                                             "); everything measured is stored" + retry +
+                                             ". Continue it with: ballbar measure --resume " + std::to_string(id) +
+                                             " --device " + o.device);
+    }
     if (sum.final_state == acq::State::Done) {
-        print_results(std::cout, sum);
-        std::cout << "Session " << id << " completed (" << sum.samples << " samples).\n";
+        if (o.json) {
+            nlohmann::json j = {
+                {"event", "done"}, {"session", id}, {"samples", sum.samples}, {"programs", sum.programs}};
+            std::cout << j.dump() << std::endl;
+        } else {
+            print_results(std::cout, plan, sum);
+            std::cout << "Session " << id << " completed (" << sum.samples << " samples, " << sum.programs
+                      << (sum.programs == 1 ? " program" : " programs") << ").\n";
+        }
         return kExitOk;
     }
     if (sum.final_state == acq::State::Aborted)
@@ -220,6 +242,7 @@ BALLBAR_COMMAND(measure) {
     sub->add_flag("--dry-run", o->dry_run, "Check the plan and write the NC program (stdout or --program) only");
     sub->add_option("--from-point", o->from_point, "With --dry-run: the program from this point (0-based) on");
     sub->add_flag("--non-interactive", o->non_interactive, "Take every answer from the plan file");
+    sub->add_flag("--json", o->json, "Events as JSON lines on stdout (answers from stdin, or the plan's)");
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_measure(*o, globals); }; });
 }
 

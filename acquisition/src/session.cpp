@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/acquisition/session.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -28,13 +29,31 @@ std::string fmt(double v, int precision = 4) {
 }  // namespace
 
 Session::Session(const Plan& plan, SampleSource& source, SessionSink& sink, Operator& op, SessionOptions options)
-    : plan_(plan), source_(source), sink_(sink), op_(op), options_(options) {
-    captured_.reserve(plan.points.size());
-}
+    : plan_(plan),
+      source_(source),
+      sink_(sink),
+      op_(op),
+      options_(options),
+      captured_(plan.points.size()),
+      failures_(plan.points.size(), 0),
+      best_failed_(plan.points.size()),
+      failure_why_(plan.points.size()) {}
 
 void Session::restore(std::span<const CapturedPoint> done) {
-    if (done.size() > plan_.points.size()) throw PlanError("resume: the session has more points than its plan");
-    captured_.assign(done.begin(), done.end());
+    for (const CapturedPoint& c : done) {
+        const PlannedPoint& p = c.planned;
+        if (p.test < 0 || p.test >= plan_.test_count() || p.step < 1 || p.step > 2 || p.point < 0 ||
+            p.point >= plan_.points_per_step)
+            throw PlanError("resume: a stored point is not in the session's plan");
+        captured_[plan_.index(p.test, p.step, p.point)] = c;
+    }
+}
+
+std::vector<std::size_t> Session::missing() const {
+    std::vector<std::size_t> out;
+    for (std::size_t i = 0; i < captured_.size(); ++i)
+        if (!captured_[i]) out.push_back(i);
+    return out;
 }
 
 void Session::fire(Event e, std::string detail) {
@@ -48,14 +67,11 @@ bool Session::stop_requested() const {
 }
 
 void Session::check_stop() {
-    // Before every read of the instrument and every question to the operator: a Ctrl-C that came
-    // while neither was waiting is seen here (one that comes during either cuts it short, EINTR).
     if (stop_requested()) end(Event::Abort, "interrupted by the operator");
 }
 
 void Session::end(Event e, const std::string& reason) {
-    // Whatever ends the session once a stop was requested (a prompt or a read cut short by the
-    // signal) is the operator's interruption, not a failure of the instrument.
+    summary_.missing = missing();
     if (stop_requested()) {
         summary_.interrupted = true;
         summary_.reason = "interrupted by the operator";
@@ -64,6 +80,14 @@ void Session::end(Event e, const std::string& reason) {
     }
     summary_.reason = reason;
     fire(e, reason);
+    throw Stop{};
+}
+
+void Session::end_interrupted(const std::string& reason) {
+    summary_.missing = missing();
+    summary_.interrupted = true;
+    summary_.reason = reason;
+    fire(Event::Abort, "interrupted: " + reason);
     throw Stop{};
 }
 
@@ -77,56 +101,78 @@ SessionSummary Session::run() {
         fire(Event::Connected, status_.description);
         check_instrument();
         set_up();
-        try {
-            source_.start();
-        } catch (const SourceError& err) {
-            end(Event::Fail, std::string("the instrument does not stream: ") + err.what());
+        for (;;) {
+            measure_missing();
+            fire(Event::AllPointsCaptured, std::to_string(plan_.points.size()) + " points");
+            compute_all();
+            fire(Event::ResultsReady, std::to_string(summary_.tests.size()) + " tests");
+            if (review()) break;
         }
-        check_stop();
-        op_.run_program(captured_.size());
-        for (int t = 0; t < plan_.test_count(); ++t) measure_test(t);
-        check_stop();
-        const bool ok = op_.confirm("accept", "Accept the results?");
-        if (!ok) end(Event::Abort, "results not accepted by the operator");
         fire(Event::Accepted);
     } catch (const Stop&) {
+    }
+    if (streaming_) {
+        try {
+            stream_off();
+        } catch (const SourceError&) {
+        }
     }
     summary_.final_state = sm_.state();
     return summary_;
 }
 
 void Session::check_instrument() {
+    // The bar length first: nothing is asked of the operator for a bar that cannot measure this plan.
+    if (std::abs(status_.calibrated_length_mm - plan_.spec.bar_length_mm) > plan_.spec.capture.tolerance_mm)
+        end(Event::Fail, "the plan's bar length " + fmt(plan_.spec.bar_length_mm, 3) +
+                             " mm differs from the instrument's calibrated length " +
+                             fmt(status_.calibrated_length_mm, 3) +
+                             " mm: set \"bar_length_mm\": " + fmt(status_.calibrated_length_mm, 3) +
+                             " in the plan, or fit the " + fmt(plan_.spec.bar_length_mm, 3) + " mm bar");
     if (status_.battery_pct < 5)
         end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
     check_stop();
     if (!status_.bar_temp_C &&
         !op_.confirm("temperature", "The bar's temperature sensor failed. Measure without bar temperature?"))
         end(Event::Fail, "bar temperature sensor failed");
-    if (!status_.referenced) {
-        check_stop();
-        if (!op_.confirm("reference", "Put the bar in its calibrator to set the reference (zero). Ready?"))
-            end(Event::Abort, "reference not set");
-        try {
-            source_.set_reference();
-        } catch (const SourceError& err) {
-            end(Event::Fail, std::string("setting the reference failed: ") + err.what());
-        }
-    }
-    if (std::abs(status_.calibrated_length_mm - plan_.spec.bar_length_mm) > plan_.spec.capture.tolerance_mm)
-        end(Event::Fail, "the plan's bar length " + fmt(plan_.spec.bar_length_mm, 3) +
-                             " mm differs from the instrument's calibrated length " +
-                             fmt(status_.calibrated_length_mm, 3) + " mm");
-    DwellSettings ds;
-    ds.window = std::max<std::size_t>(
+    if (!status_.referenced) reference();
+    AttributionSettings as;
+    as.point_count = plan_.points.size();
+    as.sample_rate_hz = status_.sample_rate_hz;
+    as.bar_length_mm = plan_.spec.bar_length_mm;
+    as.plateau_std_mm = std::max(0.008, 4 * plan_.spec.capture.max_std_mm);
+    as.dwell.window = std::max<std::size_t>(
         3, static_cast<std::size_t>(std::lround(plan_.spec.capture.window_s * status_.sample_rate_hz)));
-    ds.still_std_mm = 4 * plan_.spec.capture.max_std_mm;
-    ds.still_drift_mm = 4 * plan_.spec.capture.max_drift_mm;
-    ds.tolerance_mm = plan_.spec.capture.tolerance_mm;
-    ds.calibrated_length_mm = status_.calibrated_length_mm;
-    detector_.emplace(ds);
+    as.dwell.still_std_mm = 4 * plan_.spec.capture.max_std_mm;
+    as.dwell.still_drift_mm = 4 * plan_.spec.capture.max_drift_mm;
+    as.dwell.tolerance_mm = plan_.spec.capture.tolerance_mm;
+    as.dwell.calibrated_length_mm = status_.calibrated_length_mm;
+    attribution_settings_ = as;
+    attributor_.emplace(as);
+    std::vector<double> expected;
+    for (const PlannedPoint& p : plan_.points) expected.push_back(p.nominal_mm);
+    attributor_->set_expected(expected);
     std::string detail = "battery " + fmt(status_.battery_pct, 0) + " %";
     if (status_.bar_temp_C) detail += ", bar " + fmt(*status_.bar_temp_C, 2) + " °C";
     fire(Event::CheckPassed, detail);
+}
+
+void Session::reference() {
+    for (;;) {
+        check_stop();
+        if (op_.confirm("reference", "Put the bar in its calibrator to set the reference (zero). Ready?")) break;
+        const std::size_t c = op_.choose({"reference-declined",
+                                          "The instrument must be referenced before it measures. Ask again, or stop "
+                                          "the session (resumable)?",
+                                          {"again", "stop"},
+                                          0});
+        if (c == 1) end_interrupted("reference not set");
+    }
+    try {
+        source_.set_reference();
+    } catch (const SourceError& err) {
+        end_interrupted(std::string("setting the reference failed: ") + err.what());
+    }
 }
 
 void Session::set_up() {
@@ -148,153 +194,354 @@ void Session::set_up() {
             break;
     }
     const Vec3& s = plan_.spec.tests.front().socket_mm;
-    os << "\nSocket at (" << s.x() << ", " << s.y() << ", " << s.z() << ") mm in the table frame.";
-    if (!captured_.empty()) os << "\nResuming after " << captured_.size() << " captured points.";
+    os << "\nSocket at (" << s.x() << ", " << s.y() << ", " << s.z() << ") mm in the table frame; the bar is "
+       << "mounted when the program stops for it.";
+    const std::size_t have = plan_.points.size() - missing().size();
+    if (have > 0) os << "\nResuming with " << have << " of " << plan_.points.size() << " points captured.";
     check_stop();
     if (!op_.confirm("setup", os.str())) end(Event::Abort, "set-up not confirmed");
-    fire(Event::SetUpConfirmed, std::string(to_string(g.type)) + ", " + std::to_string(plan_.test_count()) + " tests");
 }
 
-void Session::measure_test(int test) {
-    capture_step(test, 1);
-    fire(Event::StepComplete, "test " + std::to_string(test + 1) + " step 1");
-    const TestSpec& t = plan_.spec.tests[static_cast<std::size_t>(test)];
-    std::string rot = "Rotate to " + std::string(1, rotary_axes(plan_.machine.geometry.type).first) + " = " +
-                      fmt(rad_to_deg(t.first_rad), 3) + "°, " +
-                      std::string(1, rotary_axes(plan_.machine.geometry.type).second) + " = " +
-                      fmt(rad_to_deg(t.second_rad), 3) + "°";
-    if (t.kind == TestKind::TableAlpha) rot += " (the reference is the turning table's socket)";
-    op_.message(rot);
-    capture_step(test, 2);
-    fire(Event::StepComplete, "test " + std::to_string(test + 1) + " step 2");
-    compute(test);
-    if (test + 1 < plan_.test_count())
-        fire(Event::NextTest, "test " + std::to_string(test + 2));
-    else
-        fire(Event::AllTestsDone);
+double Session::entry_time_s(const ProgramEntry& e) const {
+    return e.feed_s + e.dwell_s + 60.0 * e.rapid_mm / 10000.0;
 }
 
-void Session::capture_step(int test, int step) {
-    const std::size_t first = plan_.index(test, step, 0);
-    const std::size_t last = first + static_cast<std::size_t>(plan_.points_per_step);
-    if (captured_.size() >= last) {
-        fire(Event::InPosition, "restored from the interrupted session");
-        return;
-    }
-    bool positioning = true;
-    if (captured_.size() > first) {
-        fire(Event::InPosition, "resuming at " + where(plan_.points[captured_.size()]));
-        positioning = false;
-    }
-    while (captured_.size() < last) {
-        capture_point(plan_.points[captured_.size()], positioning);
-        positioning = false;
-    }
+double Session::entry_timeout_s(const ProgramEntry& e) const {
+    const double slow =
+        e.feed_s / options_.slowest_feed_override + 60.0 * e.rapid_mm / options_.slowest_rapid_mm_min + e.dwell_s;
+    return 1.5 * slow + 10.0;
 }
 
-void Session::capture_point(const PlannedPoint& planned, bool positioning) {
-    const CaptureSettings& cs = plan_.spec.capture;
-    int attempts = 0;
+void Session::measure_missing() {
+    bool retry = summary_.programs > 0 || missing().size() < plan_.points.size();
     for (;;) {
-        const WindowStats w = *wait_for_window(planned, positioning);
-        positioning = false;
-        CapturedPoint cp;
-        cp.planned = planned;
-        cp.measured_mm = w.mean_mm;
-        cp.std_mm = w.std_mm;
-        cp.drift_mm = w.drift_mm;
-        cp.n = w.n;
-        cp.first_seq = w.first_seq;
-        cp.last_seq = w.last_seq;
-        cp.bar_temp_C = w.bar_temp_C;
-        cp.time_s = 1e-6 * static_cast<double>((w.first_time_us + w.last_time_us) / 2 - first_time_us_.value_or(0));
-        std::string why;
-        if (w.std_mm > cs.max_std_mm)
-            why = "std " + fmt(w.std_mm * 1e3, 2) + " µm above " + fmt(cs.max_std_mm * 1e3, 2) + " µm";
-        else if (std::abs(w.drift_mm) > cs.max_drift_mm)
-            why = "drift " + fmt(w.drift_mm * 1e3, 2) + " µm above " + fmt(cs.max_drift_mm * 1e3, 2) + " µm";
-        else if (std::abs(w.mean_mm - planned.nominal_mm) > cs.tolerance_mm)
-            why = "reads " + fmt(w.mean_mm) + " mm, expected " + fmt(planned.nominal_mm) + " mm";
-        else if (w.flagged)
-            why = "samples flagged by the instrument (reference or temperature)";
-        if (why.empty() || attempts >= cs.retries) {
-            if (!why.empty()) {
-                fire(Event::PointRejected, where(planned) + ": " + why);
-                check_stop();
-                switch (op_.point_failed(cp, why)) {
-                    case PointFailureAction::Retry:
-                        attempts = 0;
-                        detector_->reset(true);
-                        continue;
-                    case PointFailureAction::Abort:
-                        end(Event::Abort, where(planned) + " failed: " + why);
-                        break;
-                    case PointFailureAction::Accept:
-                        cp.operator_accepted = true;
-                        break;
+        if (missing().empty()) return;
+        if (sm_.state() == State::Retry) {
+            if (!decide_failed_points()) continue;
+            const auto miss = missing();
+            if (miss.empty()) return;
+            std::string list;
+            for (std::size_t k = 0; k < miss.size(); ++k) {
+                if (k == 6) {
+                    list += ", …";
+                    break;
                 }
+                list += (k ? ", " : "") + where(plan_.points[miss[k]]);
             }
-            captured_.push_back(cp);
-            sink_.on_point(cp);
-            fire(Event::PointCaptured, where(planned) + ": " + fmt(cp.measured_mm, 5) + " mm, std " +
-                                           fmt(cp.std_mm * 1e3, 3) + " µm, n " + std::to_string(cp.n));
-            return;
+            if (summary_.programs >= static_cast<std::size_t>(options_.max_programs))
+                end_interrupted(std::to_string(miss.size()) + " points still missing after " +
+                                std::to_string(summary_.programs) + " programs");
+            check_stop();
+            const std::size_t c = op_.choose({"missing",
+                                              std::to_string(miss.size()) + " point" + (miss.size() > 1 ? "s" : "") +
+                                                  " missing (" + list +
+                                                  "). Run a retry program for exactly these points, or stop here "
+                                                  "(resumable)?",
+                                              {"retry", "stop"},
+                                              0});
+            if (c == 1) end_interrupted(std::to_string(miss.size()) + " points missing");
+            fire(Event::RetryStarted, std::to_string(miss.size()) + " points: " + list);
         }
-        ++attempts;
-        ++summary_.recaptures;
-        fire(Event::PointRejected, where(planned) + ": " + why + "; capturing again");
-        detector_->reset(true);
+        const RunEnd r = run_program(missing(), retry);
+        retry = true;
+        if (r == RunEnd::Complete && missing().empty()) return;
+        const auto miss = missing();
+        if (!miss.empty() && sm_.state() == State::Running)
+            fire(Event::ProgramEnded, std::to_string(miss.size()) + " points missing" +
+                                          (r == RunEnd::Lost ? " (the instrument was lost)" : ""));
+        else if (!miss.empty() && sm_.state() == State::ProgramStop)
+            fire(Event::ProgramEnded, std::to_string(miss.size()) + " points missing");
     }
 }
 
-std::optional<WindowStats> Session::wait_for_window(const PlannedPoint& planned, bool positioning) {
-    DwellDetector& det = *detector_;
-    det.set_expected(planned.nominal_mm);
-    if (plan_.spec.capture.manual) {
+bool Session::decide_failed_points() {
+    // Points that failed their checks on every attempt: the operator decides.
+    const int limit = plan_.spec.capture.retries + 1;
+    for (std::size_t i = 0; i < captured_.size(); ++i) {
+        if (captured_[i] || failures_[i] < limit || !best_failed_[i]) continue;
         check_stop();
-        op_.wait_at_point(planned);
-        if (positioning) fire(Event::InPosition, where(planned));
-        det.capture_now();
+        const PointFailureAction a = op_.point_failed(*best_failed_[i], failure_why_[i]);
+        failures_[i] = 0;
+        if (a == PointFailureAction::Abort) end(Event::Abort, where(plan_.points[i]) + " failed: " + failure_why_[i]);
+        if (a == PointFailureAction::Accept) {
+            CapturedPoint cp = *best_failed_[i];
+            cp.operator_accepted = true;
+            captured_[i] = cp;
+            sink_.on_point(cp);
+            fire(Event::PointCaptured, where(cp.planned) + ": kept by the operator despite: " + failure_why_[i]);
+        }
     }
+    return true;
+}
+
+void Session::stream_on() {
+    if (streaming_) return;
+    try {
+        source_.start();
+    } catch (const SourceError& err) {
+        end_interrupted(std::string("the instrument does not stream: ") + err.what());
+    }
+    streaming_ = true;
+    silent_reads_ = 0;
+    stream_now_us_.reset();
+}
+
+void Session::stream_off() {
+    if (!streaming_) return;
+    streaming_ = false;
+    try {
+        source_.stop();
+    } catch (const SourceError&) {
+        // A link that broke while stopping shows at the next start.
+    }
+    // Samples still buffered in the driver were read before the stop; a new stream follows.
+}
+
+void Session::program_stops(const ProgramEntry& entry) {
+    for (const ProgramStop& stop : entry.stops_before) {
+        const std::string& what = stop.what;
+        if (!streaming_) stream_on();  // each stop follows a cycle start
+        stream_off();
+        if (attributor_) {
+            const AttributionEvent ev = attributor_->reset("program stop");
+            if (ev.kind == AttributionEvent::Kind::Void) on_void(ev);
+        }
+        fire(Event::ProgramStopReached, what);
+        check_stop();
+        op_.program_stop(stop);
+        check_stop();
+        fire(Event::CycleStart, what);
+    }
+}
+
+Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, bool retry) {
+    NcOptions nco;
+    MeasuringProgram prog;
+    try {
+        prog = make_measuring_program(plan_, points, nco);
+    } catch (const PlanError& e) {
+        end(Event::Fail, e.what());
+    }
+    if (retry) {
+        // The bar may still be on its socket wherever the machine stands: it comes off before the rapid.
+        prog.entries.front().stops_before.insert(
+            prog.entries.front().stops_before.begin(),
+            ProgramStop{"remove the bar from its socket and check the socket "
+                        "stands at [" +
+                            fmt(plan_.points[points.front()].socket_mm.x(), 3) + ", " +
+                            fmt(plan_.points[points.front()].socket_mm.y(), 3) + ", " +
+                            fmt(plan_.points[points.front()].socket_mm.z(), 3) +
+                            "] mm; the machine then moves to the first missing point "
+                            "in rapid; then cycle start",
+                        plan_.points[points.front()].socket_mm});
+        NcBlock c;
+        c.comment = "PROGRAM STOP: " + prog.entries.front().stops_before.front().what;
+        NcBlock m;
+        m.raw = "M0";
+        prog.nc.blocks.insert(prog.nc.blocks.begin() + 1, {c, m});
+    }
+    ++summary_.programs;
+    stream_off();
+    check_stop();
+    if (sm_.state() == State::SetUp)
+        fire(Event::SetUpConfirmed, std::string(to_string(plan_.machine.geometry.type)) + ", " +
+                                        std::to_string(plan_.test_count()) + " tests, program of " +
+                                        std::to_string(points.size()) + " points");
+    op_.run_program(prog.nc, points, retry);
+    stream_on();  // the operator started the program (cycle start)
+    program_ = &prog;
+    cursor_ = 0;
+    struct Clear {
+        const MeasuringProgram*& p;
+        ~Clear() { p = nullptr; }
+    } clear{program_};
+    std::vector<std::size_t> entry_of(plan_.points.size(), prog.entries.size());
+    for (std::size_t k = 0; k < prog.entries.size(); ++k) entry_of[prog.entries[k].point] = k;
+
+    double deadline_s = 0;  // stream time by which the entry at cursor_ is due ...
+    bool armed = false;     // ... once the stream (re)started
+    auto arm = [&](double from_s, double extra_s) {
+        deadline_s = from_s + extra_s + (cursor_ < prog.entries.size() ? entry_timeout_s(prog.entries[cursor_]) : 0);
+        armed = true;
+    };
+    bool need_stops = true;
     std::size_t since_progress = 0;
+    const CaptureSettings& cs = plan_.spec.capture;
+    std::size_t manual_at = prog.entries.size();
     for (;;) {
-        if (buffer_pos_ >= buffer_n_) {
-            fetch();
-            // A gap or a pause voids the window being averaged: the point starts again.
-            if (broken_) {
-                broken_ = false;
-                det.reset(true);
+        if (cursor_ >= prog.entries.size()) return RunEnd::Complete;
+        if (need_stops && !prog.entries[cursor_].stops_before.empty()) {
+            program_stops(prog.entries[cursor_]);
+            armed = false;
+        }
+        need_stops = false;
+        if (cs.manual && manual_at != cursor_) {
+            manual_at = cursor_;
+            // Manual capture: the operator says when the machine stands at the point.
+            stream_off();
+            const PlannedPoint& pp = plan_.points[prog.entries[cursor_].point];
+            check_stop();
+            op_.wait_at_point(pp);
+            manual_.emplace(attribution_settings_->dwell);
+            manual_->set_expected(pp.nominal_mm);
+            manual_->capture_now();
+        }
+        stream_on();
+        if (!fetch()) return RunEnd::Lost;
+        if (buffer_n_ == 0) {
+            if (silent_reads_ > options_.max_silent_reads) {
+                op_.message("The instrument sends nothing: the program's missing points go to a retry program.");
+                return RunEnd::Ended;
             }
             continue;
         }
-        const BarSample& s = buffer_[buffer_pos_++];
-        const DwellDetector::Result r = det.push(s);
-        if (++since_progress >= options_.progress_every) {
-            since_progress = 0;
-            report_progress(planned);
+        for (std::size_t i = 0; i < buffer_n_; ++i) {
+            const BarSample& s = buffer_[i];
+            const double t_s = 1e-6 * static_cast<double>(s.device_time_us);
+            if (!armed) arm(t_s, options_.start_grace_s);  // after a start or a cycle start
+            AttributionEvent ev;
+            if (cs.manual) {
+                // Manual capture: the operator's word is the evidence; a window is averaged now.
+                if (manual_->push(s) == DwellDetector::Result::Captured) {
+                    ev.kind = AttributionEvent::Kind::Captured;
+                    ev.point = prog.entries[cursor_].point;
+                    ev.stats = manual_->stats();
+                    ev.evidence = "the operator confirmed the machine at the point";
+                }
+            } else {
+                ev = attributor_->push(s);
+            }
+            if (ev.kind == AttributionEvent::Kind::Captured) {
+                const std::size_t k = ev.point ? entry_of[*ev.point] : prog.entries.size();
+                if (k >= prog.entries.size()) {
+                    ++summary_.void_dwells;
+                    fire(Event::PointRejected, where(plan_.points[*ev.point]) + ": " + ev.evidence +
+                                                   "; the point is not in the running program: not stored");
+                } else if (k < cursor_) {
+                    ++summary_.void_dwells;
+                    fire(Event::PointRejected, where(plan_.points[*ev.point]) + ": " + ev.evidence +
+                                                   "; the program is already past that point: not stored");
+                } else {
+                    on_captured(ev, k);
+                    cursor_ = k + 1;
+                    need_stops = true;
+                    arm(t_s, 0);
+                }
+            } else if (ev.kind == AttributionEvent::Kind::Void) {
+                on_void(ev);
+                if (ev.point && entry_of[*ev.point] < prog.entries.size() && entry_of[*ev.point] >= cursor_) {
+                    cursor_ = entry_of[*ev.point] + 1;
+                    need_stops = true;
+                    arm(t_s, 0);
+                }
+            }
+            if (++since_progress >= options_.progress_every) {
+                since_progress = 0;
+                report_progress();
+            }
+            if (cursor_ >= prog.entries.size()) return RunEnd::Complete;
+            if (need_stops && !prog.entries[cursor_].stops_before.empty()) break;
+            // Nothing attributable came in time: the entry at the cursor is lost; the next is due later.
+            while (armed && t_s > deadline_s && !attributor_->measuring()) {
+                const std::size_t lost = prog.entries[cursor_].point;
+                fire(Event::PointRejected, where(plan_.points[lost]) + ": no attributable dwell by " +
+                                               fmt(deadline_s, 1) + " s (the program's timing): missing");
+                ++cursor_;
+                if (cursor_ >= prog.entries.size()) return RunEnd::Complete;
+                deadline_s += entry_timeout_s(prog.entries[cursor_]);
+                if (!prog.entries[cursor_].stops_before.empty()) {
+                    need_stops = true;
+                    break;
+                }
+            }
+            if (need_stops && !prog.entries[cursor_].stops_before.empty()) break;
         }
-        if (r == DwellDetector::Result::Settled && positioning) {
-            fire(Event::InPosition, where(planned));
-            positioning = false;
-        }
-        if (r == DwellDetector::Result::Captured) return det.stats();
     }
 }
 
-void Session::fetch() {
+void Session::on_void(const AttributionEvent& ev) {
+    ++summary_.void_dwells;
+    std::string who = ev.point ? where(plan_.points[*ev.point]) + ": " : std::string("a dwell: ");
+    fire(Event::PointRejected, who + ev.evidence + "; not stored");
+}
+
+void Session::on_captured(const AttributionEvent& ev, std::size_t /*entry*/) {
+    const CaptureSettings& cs = plan_.spec.capture;
+    const std::size_t index = *ev.point;
+    const PlannedPoint& planned = plan_.points[index];
+    const WindowStats& w = ev.stats;
+    CapturedPoint cp;
+    cp.planned = planned;
+    cp.measured_mm = w.mean_mm;
+    cp.std_mm = w.std_mm;
+    cp.drift_mm = w.drift_mm;
+    cp.n = w.n;
+    cp.first_seq = w.first_seq;
+    cp.last_seq = w.last_seq;
+    cp.bar_temp_C = w.bar_temp_C;
+    cp.time_s = 1e-6 * static_cast<double>((w.first_time_us + w.last_time_us) / 2 - first_time_us_.value_or(0));
+    cp.evidence = ev.evidence;
+    std::string why;
+    if (w.std_mm > cs.max_std_mm)
+        why = "std " + fmt(w.std_mm * 1e3, 2) + " µm above " + fmt(cs.max_std_mm * 1e3, 2) + " µm";
+    else if (std::abs(w.drift_mm) > cs.max_drift_mm)
+        why = "drift " + fmt(w.drift_mm * 1e3, 2) + " µm above " + fmt(cs.max_drift_mm * 1e3, 2) + " µm";
+    else if (std::abs(w.mean_mm - planned.nominal_mm) > cs.tolerance_mm)
+        why = "reads " + fmt(w.mean_mm) + " mm, the plan predicts " + fmt(planned.nominal_mm) + " mm";
+    else if (w.flagged)
+        why = "samples flagged by the instrument (reference or temperature)";
+    if (captured_[index]) {
+        fire(Event::PointRejected, where(planned) + ": captured already; this dwell is not stored");
+        return;
+    }
+    if (!why.empty()) {
+        ++summary_.recaptures;
+        ++failures_[index];
+        if (!best_failed_[index] || w.std_mm < best_failed_[index]->std_mm) best_failed_[index] = cp;
+        failure_why_[index] = why;
+        fire(Event::PointRejected, where(planned) + ": " + why + " (" + ev.evidence + "); measured again later");
+        return;
+    }
+    captured_[index] = cp;
+    sink_.on_point(cp);
+    fire(Event::PointCaptured, where(planned) + ": " + fmt(cp.measured_mm, 5) + " mm, std " + fmt(cp.std_mm * 1e3, 3) +
+                                   " µm, n " + std::to_string(cp.n) + "; " + ev.evidence);
+    op_.point_captured(cp);
+}
+
+bool Session::fetch() {
     check_stop();
-    buffer_pos_ = buffer_n_ = 0;
+    buffer_n_ = 0;
     std::size_t n = 0;
     const ReadStatus st = source_.read(buffer_, n, options_.read_timeout);
     if (st == ReadStatus::Disconnected) {
-        pause();
-        return;
+        ++summary_.pauses;
+        streaming_ = false;
+        const AttributionEvent ev = attributor_->reset("the instrument was lost");
+        if (ev.kind == AttributionEvent::Kind::Void) on_void(ev);
+        fire(Event::DeviceLost, "instrument lost; " + std::to_string(missing().size()) + " points missing");
+        op_.message(
+            "Instrument lost: plug it back in. The running program cannot finish the measurement: "
+            "stop it (reset) once the instrument is back; the points it misses go to a retry program.");
+        for (int i = 0;; ++i) {
+            if (i >= options_.max_reconnect_attempts) end_interrupted("the instrument did not come back");
+            check_stop();
+            bool back = false;
+            try {
+                back = source_.reconnect(options_.read_timeout);
+            } catch (const SourceError& err) {
+                end_interrupted(std::string("the instrument came back unusable: ") + err.what());
+            }
+            if (back) break;
+        }
+        op_.message("Instrument back. Stop the NC program now (reset): the bar is re-referenced first.");
+        reference();
+        fire(Event::DeviceBack, "re-referenced");
+        return false;
     }
     if (st == ReadStatus::Timeout || n == 0) {
-        if (++silent_reads_ > options_.max_silent_reads)
-            end(Event::Fail, "no samples from the instrument for " +
-                                 std::to_string(silent_reads_ * options_.read_timeout.count() / 1000) + " s");
-        return;
+        ++silent_reads_;
+        return true;
     }
     silent_reads_ = 0;
     // Drop repeats, count gaps; keep the new samples at the front of the buffer.
@@ -305,75 +552,96 @@ void Session::fetch() {
             ++summary_.duplicates_dropped;
             continue;
         }
-        if (last_seq_ && s.seq != *last_seq_ + 1) {
-            ++summary_.gaps;
-            broken_ = true;
-        }
+        if (last_seq_ && s.seq != *last_seq_ + 1) ++summary_.gaps;
         if (!first_time_us_) first_time_us_ = s.device_time_us;
         last_seq_ = s.seq;
+        stream_now_us_ = s.device_time_us;
         buffer_[kept++] = s;
     }
     buffer_n_ = kept;
     summary_.samples += kept;
     if (kept > 0) sink_.on_samples(std::span<const BarSample>(buffer_.data(), kept));
+    return true;
 }
 
-void Session::pause() {
-    ++summary_.pauses;
-    const std::string at = captured_.size() < plan_.points.size() ? where(plan_.points[captured_.size()]) : "the end";
-    fire(Event::DeviceLost, "instrument lost at " + at);
-    op_.message("Instrument lost: plug it back in; the session continues at " + at + ".");
-    broken_ = true;
-    for (int i = 0; i < options_.max_reconnect_attempts; ++i) {
-        check_stop();
-        bool back = false;
+void Session::compute_all() {
+    summary_.tests.clear();
+    std::vector<CapturedPoint> all;
+    for (const auto& c : captured_) all.push_back(*c);
+    const std::span<const CapturedPoint> span(all);
+    const std::size_t k = static_cast<std::size_t>(plan_.points_per_step);
+    for (int test = 0; test < plan_.test_count(); ++test) {
         try {
-            back = source_.reconnect(options_.read_timeout);
-        } catch (const SourceError& err) {
-            end(Event::Fail, std::string("the instrument came back unusable: ") + err.what());
+            const LocationResult l1 = compute_location(plan_, test, 1, span.subspan(plan_.index(test, 1, 0), k));
+            sink_.on_location(l1);
+            const LocationResult l2 = compute_location(plan_, test, 2, span.subspan(plan_.index(test, 2, 0), k));
+            sink_.on_location(l2);
+            TestResult r = compute_test(plan_, test, l1.dV_mm, l2.dV_mm, l1.ssm.cov_mm2, l2.ssm.cov_mm2);
+            r.dV1_std_mm = l1.ssm.std_mm;
+            r.dV2_std_mm = l2.ssm.std_mm;
+            sink_.on_test(r);
+            summary_.tests.push_back(std::move(r));
+        } catch (const AnalysisError& err) {
+            end(Event::Fail, "test " + std::to_string(test + 1) + ": " + err.what());
         }
-        if (back) {
-            silent_reads_ = 0;
-            fire(Event::DeviceBack, "continuing at " + at);
-            op_.message("Instrument back: continuing at " + at + ".");
-            check_stop();
-            op_.run_program(std::min(captured_.size(), plan_.points.size() - 1));
-            return;
-        }
-    }
-    end(Event::Fail, "the instrument did not come back");
-}
-
-void Session::compute(int test) {
-    try {
-        const std::size_t a = plan_.index(test, 1, 0);
-        const std::size_t b = plan_.index(test, 2, 0);
-        const std::size_t k = static_cast<std::size_t>(plan_.points_per_step);
-        const std::span<const CapturedPoint> all(captured_);
-        const LocationResult l1 = compute_location(plan_, test, 1, all.subspan(a, k));
-        sink_.on_location(l1);
-        const LocationResult l2 = compute_location(plan_, test, 2, all.subspan(b, k));
-        sink_.on_location(l2);
-        // ΔV = ±e: the sign does not change a covariance.
-        TestResult r = compute_test(plan_, test, l1.dV_mm, l2.dV_mm, l1.ssm.cov_mm2, l2.ssm.cov_mm2);
-        sink_.on_test(r);
-        summary_.tests.push_back(std::move(r));
-    } catch (const AnalysisError& err) {
-        end(Event::Fail, "test " + std::to_string(test + 1) + ": " + err.what());
     }
 }
 
-void Session::report_progress(const PlannedPoint& planned) {
+bool Session::review() {
+    const MachineType type = plan_.machine.geometry.type;
+    std::ostringstream os;
+    os << "Results:\n";
+    for (const TestResult& t : summary_.tests) {
+        os << "  test " << t.test + 1 << ": ΔV1 (" << fmt(t.dV1_mm.x() * 1e3, 2) << ", " << fmt(t.dV1_mm.y() * 1e3, 2)
+           << ", " << fmt(t.dV1_mm.z() * 1e3, 2) << ") µm, ΔV2 (" << fmt(t.dV2_mm.x() * 1e3, 2) << ", "
+           << fmt(t.dV2_mm.y() * 1e3, 2) << ", " << fmt(t.dV2_mm.z() * 1e3, 2) << ") µm";
+        if (t.orientation.exact) {
+            const auto& e = *t.orientation.exact;
+            auto ang = [&](const char* name, double v, std::optional<double> sd) {
+                os << "; " << name << " " << fmt(rad_to_arcsec(v), 2) << "″";
+                if (sd) os << " ± " << fmt(rad_to_arcsec(*sd), 2) << "″";
+            };
+            const bool rtttr = type == MachineType::RTTTR;
+            if (!rtttr || t.kind == TestKind::TableAlpha)
+                ang("Δα", e.d_alpha_rad, t.std_rad ? std::optional(t.std_rad->d_alpha_rad) : std::nullopt);
+            if (type == MachineType::RRTTT || (rtttr && t.kind == TestKind::SpindleBeta))
+                ang("Δβ", e.d_beta_rad, t.std_rad ? std::optional(t.std_rad->d_beta_rad) : std::nullopt);
+            if (type == MachineType::TTTRR)
+                ang("Δγ", e.d_gamma_rad, t.std_rad ? std::optional(t.std_rad->d_gamma_rad) : std::nullopt);
+        } else {
+            os << "; orientation: " << t.orientation.singular;
+        }
+        os << "\n";
+    }
+    os << "Accept these results, measure every point again, or abort?";
+    check_stop();
+    const std::size_t c = op_.choose({"review", os.str(), {"accept", "measure-again", "abort"}, 0});
+    if (c == 0) return true;
+    if (c == 2) end(Event::Abort, "results not accepted by the operator");
+    for (auto& p : captured_) p.reset();
+    std::fill(failures_.begin(), failures_.end(), 0);
+    for (auto& b : best_failed_) b.reset();
+    fire(Event::Rejected, "every point is measured again");
+    return false;
+}
+
+void Session::report_progress() {
     Progress p;
     p.state = sm_.state();
-    p.test = planned.test;
-    p.step = planned.step;
-    p.point = planned.point;
-    p.done = captured_.size();
     p.total = plan_.points.size();
-    p.live_mm = detector_->last_length_mm();
-    p.expected_mm = planned.nominal_mm;
-    p.fill = detector_->fill();
+    p.done = p.total - missing().size();
+    if (program_ && cursor_ < program_->entries.size()) {
+        const PlannedPoint& pl = plan_.points[program_->entries[cursor_].point];
+        p.test = pl.test;
+        p.step = pl.step;
+        p.point = pl.point;
+        p.expected_mm = pl.nominal_mm;
+        for (std::size_t k = cursor_; k < program_->entries.size(); ++k)
+            p.time_left_s += entry_time_s(program_->entries[k]);
+    }
+    p.live_mm = attributor_->last_length_mm();
+    p.out_of_range = std::abs(p.live_mm - plan_.spec.bar_length_mm) >= 1.0;
+    p.fill = attributor_->fill();
     op_.progress(p);
 }
 

@@ -7,12 +7,13 @@ namespace ballbar::acquisition {
 namespace {
 
 constexpr std::array<std::string_view, kStateCount> kStateNames = {
-    "Connecting", "InstrumentCheck", "SetUp", "Step1Positioning", "Step1Capture", "Step2Rotation", "Step2Capture",
-    "Computing",  "Review",          "Done",  "Paused",           "Aborted",      "Failed",
+    "Connecting", "InstrumentCheck", "SetUp", "Running", "ProgramStop", "Retry",
+    "Computing",  "Review",          "Done",  "Paused",  "Aborted",     "Failed",
 };
 constexpr std::array<std::string_view, kEventCount> kEventNames = {
-    "Connected", "CheckPassed",  "SetUpConfirmed", "InPosition", "PointCaptured", "PointRejected", "StepComplete",
-    "NextTest",  "AllTestsDone", "Accepted",       "DeviceLost", "DeviceBack",    "Abort",         "Fail",
+    "Connected",  "CheckPassed",  "SetUpConfirmed",    "PointCaptured", "PointRejected", "ProgramStopReached",
+    "CycleStart", "ProgramEnded", "AllPointsCaptured", "RetryStarted",  "ResultsReady",  "Accepted",
+    "Rejected",   "DeviceLost",   "DeviceBack",        "Abort",         "Fail",
 };
 
 /// States in which the instrument is in use, so losing it pauses the session.
@@ -20,10 +21,9 @@ bool uses_device(State s) {
     switch (s) {
         case State::InstrumentCheck:
         case State::SetUp:
-        case State::Step1Positioning:
-        case State::Step1Capture:
-        case State::Step2Rotation:
-        case State::Step2Capture:
+        case State::Running:
+        case State::ProgramStop:
+        case State::Retry:
             return true;
         default:
             return false;
@@ -72,28 +72,29 @@ std::optional<State> transition(State state, Event event, State paused_from) {
             if (event == E::CheckPassed) return S::SetUp;
             break;
         case S::SetUp:
-            if (event == E::SetUpConfirmed) return S::Step1Positioning;
+            if (event == E::SetUpConfirmed) return S::Running;
             break;
-        case S::Step1Positioning:
-            if (event == E::InPosition) return S::Step1Capture;
+        case S::Running:
+            if (event == E::PointCaptured || event == E::PointRejected) return S::Running;
+            if (event == E::ProgramStopReached) return S::ProgramStop;
+            if (event == E::ProgramEnded) return S::Retry;
+            if (event == E::AllPointsCaptured) return S::Computing;
             break;
-        case S::Step1Capture:
-            if (event == E::PointCaptured || event == E::PointRejected) return S::Step1Capture;
-            if (event == E::StepComplete) return S::Step2Rotation;
+        case S::ProgramStop:
+            if (event == E::CycleStart) return S::Running;
+            if (event == E::ProgramEnded) return S::Retry;
             break;
-        case S::Step2Rotation:
-            if (event == E::InPosition) return S::Step2Capture;
-            break;
-        case S::Step2Capture:
-            if (event == E::PointCaptured || event == E::PointRejected) return S::Step2Capture;
-            if (event == E::StepComplete) return S::Computing;
+        case S::Retry:
+            if (event == E::RetryStarted) return S::Running;
+            if (event == E::PointCaptured) return S::Retry;  // a failed point the operator kept
+            if (event == E::AllPointsCaptured) return S::Computing;
             break;
         case S::Computing:
-            if (event == E::NextTest) return S::Step1Positioning;
-            if (event == E::AllTestsDone) return S::Review;
+            if (event == E::ResultsReady) return S::Review;
             break;
         case S::Review:
             if (event == E::Accepted) return S::Done;
+            if (event == E::Rejected) return S::Running;
             break;
         case S::Paused:
             if (event == E::DeviceBack) return paused_from;

@@ -21,20 +21,6 @@ double peak_rss_mb() {
     return static_cast<double>(u.ru_maxrss) / 1024.0;  // kB on Linux
 }
 
-class ProgramOperator : public acq::ScriptedOperator {
-  public:
-    ProgramOperator(const acq::Plan& plan, acq::testing::SimSource& src)
-        : acq::ScriptedOperator({}), plan_(plan), src_(src) {}
-    void run_program(std::size_t from) override {
-        src_.machine().stop(src_.now_s());
-        src_.machine().run_program(acq::make_nc_program(plan_, from));
-    }
-
-  private:
-    const acq::Plan& plan_;
-    acq::testing::SimSource& src_;
-};
-
 /// `minutes` of machine time: two tests of the seed TTTRR plan (12 points), the dwells stretched so
 /// the session lasts that long. The plan is the same size either way: only time differs.
 void BM_Session(benchmark::State& state) {
@@ -51,9 +37,11 @@ void BM_Session(benchmark::State& state) {
         setup.errors = acq::demo_errors(MachineType::TTTRR);
         setup.socket_mm = plan.points.front().socket_mm;
         setup.start = plan.points.front().pose;
-        acq::testing::SimSource source(setup, plan, acq::testing::SimOptions{});
+        acq::testing::SimOptions so;
+        so.record_poses = false;  // flat memory: nothing grows with the session
+        acq::testing::SimSource source(setup, plan, so);
         acq::testing::RecordingSink sink;
-        ProgramOperator op(plan, source);
+        acq::testing::SimOperator op(&source);
         acq::Session session(plan, source, sink, op);
         const acq::SessionSummary sum = session.run();
         if (sum.final_state != acq::State::Done) state.SkipWithError(sum.reason.c_str());

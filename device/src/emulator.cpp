@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 
 #include "ballbar/analysis/sample.hpp"
 
@@ -24,7 +26,46 @@ Emulator::Emulator(EmulatorConfig config)
       rate_hz_(config_.instrument.sample_rate_hz),
       averaging_(config_.instrument.averaging) {
     out_.reserve(kOutputLimit + p::kMaxFrameSize);
-    if (config_.program) machine_.run_nc(config_.program->text, config_.program->dialect);
+    if (config_.program && config_.program->power_on) {
+        machine_.run_nc(config_.program->text, config_.program->dialect);
+        program_started_ = true;
+        loaded_program_ = config_.program->text;
+    }
+}
+
+void Emulator::cycle_start() {
+    // The host starts streaming when it has told the operator to start the program or to press cycle
+    // start at a program stop: the emulated operator does so (docs/emulator.md).
+    if (!config_.program || config_.program->power_on) return;
+    ++counters_.cycle_starts;
+    const double t_s = static_cast<double>(now_us_) * 1e-6;
+    NcSource& src = *config_.program;
+    if (!src.file.empty()) {
+        std::ifstream in(src.file, std::ios::binary);
+        std::ostringstream ss;
+        ss << in.rdbuf();
+        if (in || in.eof()) {
+            const std::string text = ss.str();
+            try {
+                analysis::parse_nc_program(text, src.dialect);
+                if (!text.empty()) src.text = text;
+            } catch (const analysis::NcError&) {
+                // a half-written file: keep the last program
+            }
+        }
+    }
+    if (src.text.empty()) return;
+    const bool new_program = !program_started_ || src.text != loaded_program_;
+    if (!new_program && machine_.holding()) {
+        machine_.cycle_start(t_s);  // at (or on the way to) a program stop: the rest runs
+        return;
+    }
+    if (!new_program && !machine_.idle_at(t_s)) return;  // cycle start while running does nothing
+    machine_.stop(t_s);  // a new program (or the same again): reset, then run it from the start
+    machine_.run_nc(src.text, src.dialect);
+    program_started_ = true;
+    loaded_program_ = src.text;
+    ++counters_.programs_started;
 }
 
 double Emulator::uniform() {
@@ -145,6 +186,7 @@ void Emulator::handle(const p::FrameView& frame) {
         case p::MsgType::Start:
             if (!empty) return error(p::ErrorCode::BadLength);
             flush_stream();
+            cycle_start();
             streaming_ = true;
             stream_seq_ = 0;
             sample_index_ = 0;
@@ -191,6 +233,11 @@ void Emulator::flush_stream() {
     }
     ++counters_.stream_frames;
     emit(buf, n);
+    const double pr = config_.faults.replay_frame_probability;
+    if (pr > 0 && uniform() < pr) {
+        ++counters_.replayed_frames;
+        emit(buf, n);
+    }
 }
 
 void Emulator::produce_samples_until(std::uint64_t t_us) {
@@ -271,6 +318,9 @@ void Emulator::advance_to(std::uint64_t t_us) {
     }
     produce_samples_until(t_us);
     now_us_ = t_us;
+    // The machine's clock follows the emulator's whether or not the bar streams: motion queued now
+    // (a program, a cycle start) starts now.
+    machine_.pose_at(static_cast<double>(now_us_) * 1e-6);
     while (!delayed_.empty() && delayed_.front().release_us <= now_us_) {
         emit(delayed_.front().bytes, delayed_.front().size);
         delayed_.pop_front();

@@ -159,10 +159,15 @@ void parse_faults(const json& j, FaultConfig& f) {
     const std::string w = "faults";
     only_keys(j, w,
               {"drop_frame_probability", "corrupt_byte_probability", "stall_at_s", "stall_s", "disconnect_at_s",
-               "disconnect_s", "reply_delay_ms"});
+               "disconnect_s", "reply_delay_ms", "replay_frame_probability", "start_delay_s", "feed_override"});
     f.drop_frame_probability = num(j, w, "drop_frame_probability", f.drop_frame_probability);
     f.corrupt_byte_probability = num(j, w, "corrupt_byte_probability", f.corrupt_byte_probability);
-    for (double pr : {f.drop_frame_probability, f.corrupt_byte_probability}) {
+    f.replay_frame_probability = num(j, w, "replay_frame_probability", f.replay_frame_probability);
+    f.start_delay_s = num(j, w, "start_delay_s", f.start_delay_s);
+    f.feed_override = num(j, w, "feed_override", f.feed_override);
+    if (!(f.start_delay_s >= 0)) fail(w + ".start_delay_s", "must not be negative");
+    if (!(f.feed_override >= 0.1 && f.feed_override <= 2.0)) fail(w + ".feed_override", "must be in [0.1, 2]");
+    for (double pr : {f.drop_frame_probability, f.corrupt_byte_probability, f.replay_frame_probability}) {
         if (!(pr >= 0 && pr <= 1)) fail(w, "probabilities must be in [0, 1]");
     }
     f.stall_at_s = num(j, w, "stall_at_s", f.stall_at_s);
@@ -201,8 +206,14 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
     if (j.contains("faults")) parse_faults(j.at("faults"), c.faults);
     if (j.contains("program")) {
         const auto& pj = j.at("program");
-        only_keys(pj, "program", {"file", "text", "dialect"});
+        only_keys(pj, "program", {"file", "text", "dialect", "start"});
+
         NcSource src;
+        if (pj.contains("start")) {
+            const std::string st = str(pj, "program", "start", "");
+            if (st != "cycle_start" && st != "power_on") fail("program.start", "must be cycle_start or power_on");
+            src.power_on = st == "power_on";
+        }
         if (pj.contains("dialect")) {
             const auto d = analysis::parse_nc_dialect(str(pj, "program", "dialect", ""));
             if (!d) fail("program.dialect", "must be fanuc or linuxcnc");
@@ -214,7 +225,9 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
         } else {
             std::filesystem::path f = str(pj, "program", "file", "");
             if (f.is_relative()) f = std::filesystem::path(base_dir) / f;
-            src.text = read_file(f.string());
+            src.file = f.string();
+            // Waiting for cycle start, the file may not exist yet: the host writes it before the start.
+            if (src.power_on || std::filesystem::exists(f)) src.text = read_file(f.string());
         }
         try {
             analysis::parse_nc_program(src.text, src.dialect);  // fail now, with the line number

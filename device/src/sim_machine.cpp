@@ -2,8 +2,10 @@
 #include "ballbar/device/sim_machine.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace ballbar::device {
 
@@ -68,10 +70,14 @@ void SimulatedMachine::run_program(const analysis::NcProgram& program) {
     {
         std::lock_guard lock(mutex_);
         start = last_pose_;
+        held_.reset();
     }
-    const auto poses = analysis::resolve_poses(program, start);
-    double feed = 0;
-    for (std::size_t i = 0; i < program.blocks.size(); ++i) {
+    queue_blocks(program, analysis::resolve_poses(program, start), 0, 0);
+}
+
+void SimulatedMachine::queue_blocks(const analysis::NcProgram& program, const std::vector<Pose>& poses,
+                                    std::size_t from, double feed) {
+    for (std::size_t i = from; i < program.blocks.size(); ++i) {
         const auto& block = program.blocks[i];
         if (block.feed_mm_min) feed = *block.feed_mm_min;
         switch (block.motion) {
@@ -80,15 +86,80 @@ void SimulatedMachine::run_program(const analysis::NcProgram& program) {
                 break;
             case analysis::NcMotion::Feed:
                 if (!(feed > 0)) throw analysis::NcError(block.line, "G1 without a feed rate (F)");
-                move_to(poses[i], feed);
+                move_to(poses[i], feed * feed_override_);
                 break;
             case analysis::NcMotion::Dwell:
                 dwell(block.dwell_s);
                 break;
-            case analysis::NcMotion::None:
+            case analysis::NcMotion::None: {
+                // M0/M00/M1/M01: the rest waits for cycle start.
+                std::string words = block.extra_words.empty() ? block.raw : block.extra_words;
+                for (char& c : words)
+                    if (c == '(' || c == ';') c = ' ';
+                bool stop = false;
+                std::size_t pos = 0;
+                while ((pos = words.find('M', pos)) != std::string::npos) {
+                    std::size_t end = pos + 1;
+                    while (end < words.size() && std::isdigit(static_cast<unsigned char>(words[end]))) ++end;
+                    const std::string num = words.substr(pos + 1, end - pos - 1);
+                    if (!num.empty() && (std::stoi(num) == 0 || std::stoi(num) == 1)) stop = true;
+                    pos = end;
+                }
+                if (stop) {
+                    std::lock_guard lock(mutex_);
+                    held_ = Held{program, poses, i + 1, feed};
+                    return;
+                }
                 break;
+            }
         }
     }
+}
+
+bool SimulatedMachine::at_program_stop(double t_s) {
+    std::lock_guard lock(mutex_);
+    pose_locked(t_s);
+    return held_.has_value() && queue_end_s_ <= now_s_;
+}
+
+void SimulatedMachine::cycle_start(double t_s) {
+    std::optional<Held> h;
+    {
+        std::lock_guard lock(mutex_);
+        pose_locked(t_s);
+        h.swap(held_);
+    }
+    if (!h) return;
+    // The operator did what the stop said: a socket position in its comment is where the socket is now.
+    if (h->next >= 2) {
+        const std::string& c = h->program.blocks[h->next - 2].comment;
+        for (const char* key : {"socket to [", "socket stands at ["}) {
+            const auto at = c.find(key);
+            if (at == std::string::npos) continue;
+            double v[3] = {0, 0, 0};
+            std::size_t pos = at + std::string(key).size();
+            bool ok = true;
+            for (double& x : v) {
+                try {
+                    std::size_t used = 0;
+                    x = std::stod(c.substr(pos), &used);
+                    pos += used;
+                    while (pos < c.size() && (c[pos] == ',' || c[pos] == ' ')) ++pos;
+                } catch (const std::exception&) {
+                    ok = false;
+                    break;
+                }
+            }
+            if (ok) set_socket_mm(analysis::Vec3(v[0], v[1], v[2]));
+            break;
+        }
+    }
+    queue_blocks(h->program, h->poses, h->next, h->feed);
+}
+
+void SimulatedMachine::set_feed_override(double factor) {
+    if (!(factor > 0)) throw std::invalid_argument("feed override must be positive");
+    feed_override_ = factor;
 }
 
 void SimulatedMachine::run_nc(std::string_view text, analysis::NcDialect dialect) {
@@ -99,6 +170,7 @@ void SimulatedMachine::stop(double t_s) {
     std::lock_guard lock(mutex_);
     const Pose here = pose_locked(t_s);
     queue_.clear();
+    held_.reset();
     last_pose_ = here;
     queue_end_s_ = now_s_;
 }

@@ -9,23 +9,23 @@
 namespace ballbar::acquisition {
 namespace {
 
-TEST(StateMachine, HappyPathOfOneTest) {
+TEST(StateMachine, HappyPathWithAStopAndARetry) {
     StateMachine sm;
-    for (Event e : {Event::Connected, Event::CheckPassed, Event::SetUpConfirmed, Event::InPosition,
-                    Event::PointCaptured, Event::PointRejected, Event::PointCaptured, Event::StepComplete,
-                    Event::InPosition, Event::PointCaptured, Event::StepComplete, Event::AllTestsDone, Event::Accepted})
+    for (Event e :
+         {Event::Connected, Event::CheckPassed, Event::SetUpConfirmed, Event::PointCaptured, Event::PointRejected,
+          Event::ProgramStopReached, Event::CycleStart, Event::PointCaptured, Event::ProgramEnded, Event::RetryStarted,
+          Event::PointCaptured, Event::AllPointsCaptured, Event::ResultsReady, Event::Accepted})
         sm.apply(e);
     EXPECT_EQ(sm.state(), State::Done);
 }
 
-TEST(StateMachine, NextTestGoesBackToPositioning) {
-    StateMachine sm(State::Computing);
-    EXPECT_EQ(sm.apply(Event::NextTest), State::Step1Positioning);
+TEST(StateMachine, RejectedResultsMeasureAgain) {
+    StateMachine sm(State::Review);
+    EXPECT_EQ(sm.apply(Event::Rejected), State::Running);
 }
 
 TEST(StateMachine, PauseReturnsToTheStateItCameFrom) {
-    for (State s : {State::InstrumentCheck, State::SetUp, State::Step1Positioning, State::Step1Capture,
-                    State::Step2Rotation, State::Step2Capture}) {
+    for (State s : {State::InstrumentCheck, State::SetUp, State::Running, State::ProgramStop, State::Retry}) {
         StateMachine sm(s);
         EXPECT_EQ(sm.apply(Event::DeviceLost), State::Paused);
         EXPECT_EQ(sm.paused_from(), s);
@@ -63,7 +63,7 @@ std::vector<Pair> illegal_pairs() {
             const auto st = static_cast<State>(s);
             const auto ev = static_cast<Event>(e);
             // Paused's target depends on where it came from; judge it with a realistic origin.
-            if (!transition(st, ev, State::Step1Capture)) out.push_back({st, ev});
+            if (!transition(st, ev, State::Running)) out.push_back({st, ev});
         }
     return out;
 }

@@ -9,8 +9,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 
 namespace {
 
@@ -87,6 +89,46 @@ TEST_P(Demo, RecoversTheEmulatorsErrorsThroughThePty) {
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, Demo, ::testing::Values("RRTTT", "TTTRR", "RTTTR"),
                          [](const auto& p) { return std::string(p.param); });
+
+/// `demo --faults`: the same procedure under the emulator's faults, retry programs included, still
+/// within 1 µm and 2″; the report works on the session.
+class DemoFaults : public ::testing::TestWithParam<std::tuple<const char*, const char*>> {};
+
+TEST_P(DemoFaults, RecoversTheErrorsUnderFaults) {
+    const auto [type, faults] = GetParam();
+    // One database per case: ctest runs the cases in parallel.
+    const auto db =
+        temp_db(std::string(type) + "-faults-" + std::to_string(std::hash<std::string>{}(faults) % 100000) + ".db");
+    const DemoRun r =
+        run("--db " + db.string() + " demo --json --seed 4 --machine " + type + " --faults '" + faults + "'");
+    ASSERT_EQ(r.status, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    ASSERT_EQ(j.at("locations").size(), 8u);
+    for (const auto& l : j.at("locations")) {
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k)
+            d2 += std::pow(l.at("measured_mm")[k].get<double>() - l.at("true_mm")[k].get<double>(), 2);
+        EXPECT_LT(std::sqrt(d2), kPositionTol_mm) << l.dump();
+    }
+    for (const auto& o : j.at("orientation"))
+        for (const auto& [k, v] : o.at("true_rad").items())
+            EXPECT_NEAR(o.at("measured_rad").at(k).get<double>(), v.get<double>(), kAngleTol_rad) << k;
+    if (std::string(faults).find("disconnect") != std::string::npos) {
+        EXPECT_EQ(j.at("pauses").get<int>(), 1) << r.out;
+        EXPECT_GE(j.at("programs").get<int>(), 2) << "a retry program: " << r.out;
+    }
+    const DemoRun rep =
+        run("--db " + db.string() + " report " + std::to_string(j.at("session").get<int>()) + " --json");
+    EXPECT_EQ(rep.status, 0) << rep.out.substr(0, 400);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    AllTypes, DemoFaults,
+    ::testing::Combine(
+        ::testing::Values("RRTTT", "TTTRR", "RTTTR"),
+        ::testing::Values(
+            R"({"disconnect_at_s": 30, "disconnect_s": 8})",
+            R"({"drop_frame_probability": 0.03, "corrupt_byte_probability": 0.0005, "replay_frame_probability": 0.02, "start_delay_s": 20, "feed_override": 0.5})")));
 
 TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {
     const auto db = temp_db("human.db");

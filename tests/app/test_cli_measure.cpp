@@ -8,15 +8,19 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -48,19 +52,12 @@ int run(const std::string& args, std::string* out = nullptr) {
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
-/// The emulator's configuration with the plan's NC program from `from_point` (run from power-on).
-fs::path emulator_config(const fs::path& dir, std::size_t from_point = 0) {
-    std::string out;
-    const fs::path prog = dir / ("plan-" + std::to_string(from_point) + ".nc");
-    EXPECT_EQ(run("measure --dry-run --machine " + (kData / "tttrr.json").string() + " --plan " +
-                      (kData / "tttrr-quick.plan.json").string() + " --program " + prog.string() + " --from-point " +
-                      std::to_string(from_point),
-                  &out),
-              0)
-        << out;
+/// The emulator's configuration running the NC program `measure` writes to `program` (the emulated
+/// operator loads it and presses cycle start when `measure` starts the stream).
+fs::path emulator_config(const fs::path& dir, const fs::path& program) {
     std::string cfg = slurp(kData / "tttrr-emulator.json");
-    cfg.replace(cfg.find("PROGRAM"), 7, prog.string());
-    const fs::path path = dir / ("emulator-" + std::to_string(from_point) + ".json");
+    cfg.replace(cfg.find("PROGRAM"), 7, program.string());
+    const fs::path path = dir / ("emulator-" + program.stem().string() + ".json");
     std::ofstream(path) << cfg;
     return path;
 }
@@ -85,13 +82,14 @@ TEST(CliMeasure, DryRunChecksThePlanAndWritesTheProgram) {
 
 TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
     const fs::path dir = temp_dir();
-    const fs::path cfg = emulator_config(dir);
+    const std::string prog = (dir / "session.nc").string();
+    fs::remove(prog);
+    const fs::path cfg = emulator_config(dir, prog);
     const fs::path db = dir / "interactive.db";
     fs::remove(db);
     const std::string exe = BALLBAR_EXE;
     const std::string machine = (kData / "tttrr.json").string();
     const std::string plan = (kData / "tttrr-quick.plan.json").string();
-    const std::string prog = (dir / "session.nc").string();
     const std::string device = "emulator:" + cfg.string();
 
     int master = -1;
@@ -115,12 +113,24 @@ TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
             if (n <= 0) break;  // the child closed the terminal
             screen.append(buf.data(), static_cast<std::size_t>(n));
         }
-        // Answer each new "[Y/n]" prompt with yes.
-        std::size_t prompts = 0;
-        for (std::size_t at = screen.find("[Y/n]"); at != std::string::npos; at = screen.find("[Y/n]", at + 1))
-            ++prompts;
-        while (answered < prompts) {
-            ASSERT_EQ(::write(master, "y\n", 2), 2);
+        // Answer each new question as it appears: yes, Enter after cycle start, accept the results
+        // (the first time with a typo, which is asked again).
+        struct Prompt {
+            const char* text;
+            std::string answer;
+        };
+        const Prompt prompts[] = {{"[yes/no]", "yes\n"},
+                                  {"pressed cycle start.", "\n"},
+                                  {"]easure-again or", "acept\n"},
+                                  {"Please answer", "a\n"}};
+        std::vector<std::pair<std::size_t, std::string>> due;
+        for (const Prompt& p : prompts)
+            for (std::size_t at = screen.find(p.text); at != std::string::npos; at = screen.find(p.text, at + 1))
+                due.emplace_back(at, p.answer);
+        std::sort(due.begin(), due.end());
+        while (answered < due.size()) {
+            const std::string& a = due[answered].second;
+            ASSERT_EQ(::write(master, a.data(), a.size()), static_cast<ssize_t>(a.size()));
             ++answered;
         }
         if (std::chrono::steady_clock::now() > deadline) {
@@ -133,9 +143,15 @@ TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
     ::close(master);
     ASSERT_TRUE(WIFEXITED(status)) << screen;
     EXPECT_EQ(WEXITSTATUS(status), 0) << screen;
-    EXPECT_GE(answered, 3u) << screen;  // reference, set-up, accept
+    EXPECT_GE(answered, 5u) << screen;  // reference, set-up, mount the bar, accept (with a typo)
     EXPECT_NE(screen.find("calibrator"), std::string::npos) << screen;
-    EXPECT_NE(screen.find("Start the NC program"), std::string::npos) << screen;
+    EXPECT_NE(screen.find("start it on the machine"), std::string::npos) << screen;
+    EXPECT_NE(screen.find("Program stop (M0): mount the bar"), std::string::npos) << screen;
+    EXPECT_NE(screen.find("Please answer [a]ccept"), std::string::npos) << "a typo is asked again: " << screen;
+    EXPECT_NE(screen.find("ΔV1 ("), std::string::npos) << "results shown before they are accepted: " << screen;
+    EXPECT_NE(screen.find(", σ "), std::string::npos) << "each point with its standard deviation: " << screen;
+    EXPECT_NE(screen.find(" left"), std::string::npos) << "time left: " << screen;
+    EXPECT_EQ(screen.find("Δβ"), std::string::npos) << "a TTTRR has no Δβ: " << screen;
     EXPECT_NE(screen.find("] 3/6"), std::string::npos) << "progress bar: " << screen;
     EXPECT_NE(screen.find("bar "), std::string::npos) << "live bar reading: " << screen;
     EXPECT_NE(screen.find(" µm)"), std::string::npos) << "live bar reading: " << screen;
@@ -145,9 +161,93 @@ TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
     EXPECT_TRUE(fs::exists(prog));
 }
 
+/// docs/procedure.md's two commands, in two processes: `ballbar emulate --pty --config …` and
+/// `ballbar measure --device serial:PTY …` (with --non-interactive), to a completed session.
+TEST(CliMeasure, TheDocumentedTwoProcessCommandsCompleteASession) {
+    const fs::path dir = temp_dir();
+    const fs::path db = dir / "two-process.db";
+    fs::remove(db);
+    fs::remove("/tmp/ballbar-session.nc");
+    const std::string exe = BALLBAR_EXE;
+    const std::string cfg = (kData / "tttrr-emulator-measure.json").string();
+    int outfd[2];
+    ASSERT_EQ(::pipe(outfd), 0);
+    const pid_t emu = ::fork();
+    ASSERT_GE(emu, 0);
+    if (emu == 0) {
+        ::dup2(outfd[1], STDOUT_FILENO);
+        ::close(outfd[0]);
+        ::execl(exe.c_str(), exe.c_str(), "emulate", "--pty", "--config", cfg.c_str(), static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    ::close(outfd[1]);
+    std::string line;
+    char c = 0;
+    while (::read(outfd[0], &c, 1) == 1 && c != '\n') line += c;
+    ASSERT_EQ(line.rfind("/dev/pts/", 0), 0u) << line;
+    std::string out;
+    const int code = run("--db " + db.string() + " measure --non-interactive --device serial:" + line + " --machine " +
+                             (kData / "tttrr.json").string() + " --plan " + (kData / "tttrr-quick.plan.json").string() +
+                             " --program /tmp/ballbar-session.nc",
+                         &out);
+    ::kill(emu, SIGINT);
+    int st = 0;
+    ::waitpid(emu, &st, 0);
+    ::close(outfd[0]);
+    EXPECT_EQ(code, 0) << out;
+    EXPECT_NE(out.find("Program stop (M0): mount the bar"), std::string::npos) << out;
+    EXPECT_NE(out.find("completed"), std::string::npos) << out;
+    EXPECT_NE(out.find("1 program)"), std::string::npos) << "no retry needed: " << out;
+}
+
+TEST(CliMeasure, ADefaultPlanWithTheEmulatorsDefaultBarIsRefusedBeforeAnyQuestion) {
+    const fs::path dir = temp_dir();
+    std::string out;
+    const int code = run("--db " + (dir / "mismatch.db").string() + " measure --device emulator: --machine " +
+                             (kData / "tttrr.json").string(),
+                         &out);
+    EXPECT_EQ(code, 1) << out;
+    EXPECT_NE(out.find("\"bar_length_mm\": 150.000"), std::string::npos) << "names the fix: " << out;
+    EXPECT_EQ(out.find("calibrator"), std::string::npos) << "nothing asked first: " << out;
+}
+
+TEST(CliMeasure, JsonGivesTheOperatorsEventsAsJsonLines) {
+    const fs::path dir = temp_dir();
+    fs::remove(dir / "j.nc");
+    const fs::path cfg = emulator_config(dir, dir / "j.nc");
+    const fs::path db = dir / "json.db";
+    fs::remove(db);
+    std::string out;
+    const int code = run("--db " + db.string() + " measure --json --non-interactive --device emulator:" + cfg.string() +
+                             " --machine " + (kData / "tttrr.json").string() + " --plan " +
+                             (kData / "tttrr-quick.plan.json").string() + " --program " + (dir / "j.nc").string(),
+                         &out);
+    EXPECT_EQ(code, 0) << out;
+    int points = 0, stops = 0, programs = 0, done = 0;
+    std::istringstream lines(out);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.empty() || line[0] != '{') continue;  // the session line
+        const auto j = nlohmann::json::parse(line);
+        const std::string ev = j.at("event");
+        if (ev == "point") {
+            ++points;
+            EXPECT_GT(j.at("std_um").get<double>(), 0.0) << line;
+            EXPECT_NE(j.at("evidence").get<std::string>().find("code "), std::string::npos) << line;
+        }
+        stops += ev == "program_stop";
+        programs += ev == "run_program";
+        done += ev == "done";
+    }
+    EXPECT_EQ(points, 6) << out;
+    EXPECT_EQ(stops, 1) << out;
+    EXPECT_EQ(programs, 1) << out;
+    EXPECT_EQ(done, 1) << out;
+}
+
 TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
     const fs::path dir = temp_dir();
-    const fs::path cfg = emulator_config(dir);
+    fs::remove(dir / "b.nc");
+    const fs::path cfg = emulator_config(dir, dir / "b.nc");
     const fs::path db = dir / "batch.db";
     fs::remove(db);
     std::string out;
@@ -182,8 +282,9 @@ StoppedMeasure measure_then_signal(const fs::path& dir, const fs::path& db, int 
     const std::string exe = BALLBAR_EXE;
     const std::string machine = (kData / "tttrr.json").string();
     const std::string plan = (kData / "tttrr-quick.plan.json").string();
-    const std::string device = "emulator:" + emulator_config(dir).string();
     const std::string prog = (dir / "k.nc").string();
+    fs::remove(prog);
+    const std::string device = "emulator:" + emulator_config(dir, prog).string();
     StoppedMeasure r;
     int outfd[2];
     if (::pipe(outfd) != 0) return r;
@@ -215,16 +316,18 @@ StoppedMeasure measure_then_signal(const fs::path& dir, const fs::path& db, int 
     return r;
 }
 
-/// The machine runs the program from the fourth point; the session continues there.
+/// A new emulator (the machine runs whatever program `measure` writes); the session continues with a
+/// retry program for the three points still missing.
 void expect_resumes_after_three_points(const fs::path& dir, const fs::path& db, const std::string& session) {
-    const std::string resumed_device = "emulator:" + emulator_config(dir, 3).string();
+    fs::remove(dir / "k2.nc");
+    const std::string resumed_device = "emulator:" + emulator_config(dir, dir / "k2.nc").string();
     std::string out2;
     const int code = run("--db " + db.string() + " measure --non-interactive --device " + resumed_device +
                              " --resume " + session + " --program " + (dir / "k2.nc").string(),
                          &out2);
     EXPECT_EQ(code, 0) << out2;
     EXPECT_NE(out2.find("resumed after 3 points"), std::string::npos) << out2;
-    EXPECT_NE(out2.find("from test 1 step 2 point 1"), std::string::npos) << out2;
+    EXPECT_NE(out2.find("Retry program (3 points)"), std::string::npos) << out2;
     EXPECT_NE(out2.find("completed"), std::string::npos) << out2;
     EXPECT_NE(out2.find("orientation (exact)"), std::string::npos) << out2;
 }

@@ -206,7 +206,7 @@ TEST(Emulator, OutOfRangeIsClampedAndFlagged) {
 
 TEST(Emulator, MachineExecutesNcProgram) {
     auto cfg = quiet_config();
-    cfg.program = NcSource{"G90\nG1 X110 F600\nG4 P1000\nG0 X100\n", analysis::NcDialect::Fanuc};
+    cfg.program = NcSource{"G90\nG1 X110 F600\nG4 P1000\nG0 X100\n", analysis::NcDialect::Fanuc, true, {}};
     Emulator emu(cfg);
     auto& m = emu.machine();
     EXPECT_NEAR(m.pose_at(0.5).X_mm, 105.0, 1e-9);  // 10 mm at 600 mm/min takes 1 s

@@ -11,9 +11,12 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
+#include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/plan.hpp"
 #include "ballbar/acquisition/state_machine.hpp"
+#include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/sample.hpp"
 #include "ballbar/analysis/ssm.hpp"
@@ -47,10 +50,14 @@ class SampleSource {
     virtual void set_reference() = 0;
     /// Starts streaming samples. Throws SourceError.
     virtual void start() = 0;
+    /// Stops streaming (before the operator is asked something, so a long wait loses nothing and
+    /// overruns nothing). Throws SourceError.
+    virtual void stop() = 0;
     /// Up to out.size() samples into `out`; `n` says how many. Samples carry contiguous `seq` numbers;
     /// after a reconnect they continue the numbering (a repeat or a gap is the acquisition's to notice).
     virtual ReadStatus read(std::span<analysis::BarSample> out, std::size_t& n, std::chrono::milliseconds timeout) = 0;
-    /// After Disconnected: tries to get the instrument back and streaming; false when not (yet) back.
+    /// After Disconnected: tries to get the instrument back (identified, not streaming: the session
+    /// re-references it first); false when not (yet) back.
     virtual bool reconnect(std::chrono::milliseconds timeout) = 0;
 };
 
@@ -65,6 +72,8 @@ struct CapturedPoint {
     double time_s = 0;  ///< device time of the window's middle, since the session's first sample
     double bar_temp_C = 20;
     bool operator_accepted = false;  ///< failed a quality check and the operator kept it
+    /// Why this dwell is this point: the code read from the bar and the window's time (attribution.hpp).
+    std::string evidence;
 };
 
 struct TransitionRecord {
@@ -88,6 +97,8 @@ struct TestResult {
     int test = 0;
     TestKind kind = TestKind::BothAxes;
     analysis::Vec3 dV1_mm = analysis::Vec3::Zero(), dV2_mm = analysis::Vec3::Zero();
+    /// Standard uncertainty of each ΔV component (SSM); zero when not known.
+    analysis::Vec3 dV1_std_mm = analysis::Vec3::Zero(), dV2_std_mm = analysis::Vec3::Zero();
     analysis::OrientationSolution orientation;
     /// Standard uncertainty of orientation.exact, propagated to first order from the covariances of
     /// ΔV1 and ΔV2; empty without them or at a singular pose.
@@ -112,24 +123,40 @@ struct Progress {
     std::size_t done = 0, total = 0;  ///< points
     double live_mm = 0;               ///< latest bar length
     double expected_mm = 0;
-    double fill = 0;  ///< 0..1 of the current averaging window
+    double fill = 0;            ///< 0..1 of the current averaging window
+    double time_left_s = 0;     ///< the running program's remaining time at 100 % feed
+    bool out_of_range = false;  ///< the latest sample is beyond the transducer's range
+};
+
+/// A choice among named options ("retry", "accept", "abort"); the answer is the option's index.
+struct Choice {
+    std::string what;    ///< identifies the question for scripted answers ("missing", "review", …)
+    std::string prompt;  ///< the question, with everything the operator needs to decide
+    std::vector<std::string> options;
+    std::size_t default_option = 0;  ///< what a scripted run answers unless its plan says otherwise
 };
 
 class Operator {
   public:
     virtual ~Operator() = default;
-    /// A yes/no question; `what` identifies it for scripted answers ("setup", "reference", "accept", …).
+    /// A yes/no question; `what` identifies it for scripted answers ("setup", "reference", …).
     virtual bool confirm(std::string_view what, std::string_view prompt) = 0;
+    /// One of several options; returns its index.
+    virtual std::size_t choose(const Choice& choice) = 0;
     virtual void message(std::string_view text) = 0;
-    /// A point failed its checks after the automatic re-captures.
+    /// A point failed its checks on every attempt (retry, accept or abort).
     virtual PointFailureAction point_failed(const CapturedPoint& p, std::string_view why) = 0;
     /// Manual mode: returns when the operator says the machine stands at the point.
     virtual void wait_at_point(const PlannedPoint& p) = 0;
     virtual void progress(const Progress& p) = 0;
-    /// The machine must run the plan's NC program from `from_point` now: once the bar streams (cycle
-    /// start), and again after the instrument came back (its dwell at the point may have passed while
-    /// the bar was away) — `from_point` is then the first point not captured.
-    virtual void run_program(std::size_t from_point) = 0;
+    /// The machine must run `program` (the points `points` of the plan, in that order) now: the
+    /// operator loads it and presses cycle start. `retry` when it is a program for missing points.
+    virtual void run_program(const analysis::NcProgram& program, std::span<const std::size_t> points, bool retry) = 0;
+    /// The program stops (M0) for the operator: `stop.what` says what to do there; returns once the
+    /// operator did it and pressed cycle start.
+    virtual void program_stop(const ProgramStop& stop) = 0;
+    /// A point was captured (attributed and within its checks) and stored.
+    virtual void point_captured(const CapturedPoint&) {}
 };
 
 /// Answers from the plan file; messages and progress are dropped.
@@ -138,8 +165,14 @@ class ScriptedOperator : public Operator {
     explicit ScriptedOperator(Answers answers) : answers_(std::move(answers)) {}
     bool confirm(std::string_view what, std::string_view) override {
         if (what == "setup") return answers_.confirm_setup;
-        if (what == "accept") return answers_.accept_results;
         return true;
+    }
+    std::size_t choose(const Choice& c) override {
+        if (c.what == "review") {
+            for (std::size_t i = 0; i < c.options.size(); ++i)
+                if (c.options[i] == (answers_.accept_results ? "accept" : "abort")) return i;
+        }
+        return c.default_option;
     }
     void message(std::string_view) override {}
     PointFailureAction point_failed(const CapturedPoint&, std::string_view) override {
@@ -147,9 +180,10 @@ class ScriptedOperator : public Operator {
     }
     void wait_at_point(const PlannedPoint&) override {}
     void progress(const Progress&) override {}
-    void run_program(std::size_t) override {}
+    void run_program(const analysis::NcProgram&, std::span<const std::size_t>, bool) override {}
+    void program_stop(const ProgramStop&) override {}
 
-  private:
+  protected:
     Answers answers_;
 };
 

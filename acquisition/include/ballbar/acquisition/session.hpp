@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: MIT
-// Runs a plan through the state machine: instrument check, set-up, then for each test step 1 and
-// step 2 (dwell capture of every point), SSM and the orientation model, review. Samples, points,
-// transitions and results go to the sink as they happen. A lost instrument pauses the session; it
-// continues at the same point when the instrument is back. Given the points of an interrupted
-// session, it continues after the last completed one.
+// Runs a plan through the state machine: instrument check, set-up, then NC programs until every
+// planned point is captured: the full program first, then retry programs for exactly the points still
+// missing. Each dwell is attributed to its point from the code the program writes into the bar length
+// (attribution.hpp), never by counting dwells; a dwell that cannot be attributed is not stored. The
+// program's own timing (nc_writer.hpp's ProgramEntry) bounds every wait. Program stops (M0) prompt the
+// operator; a lost instrument is re-referenced when it is back and the points the running program did
+// not deliver go to a retry program. Samples, points (with their evidence), transitions and results go
+// to the sink as they happen. A session that cannot finish ends interrupted (resumable) with the list
+// of its missing points.
 #pragma once
 
 #include <array>
@@ -14,35 +18,48 @@
 #include <string>
 #include <vector>
 
-#include "ballbar/acquisition/dwell.hpp"
+#include "ballbar/acquisition/attribution.hpp"
 #include "ballbar/acquisition/interfaces.hpp"
+#include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/state_machine.hpp"
 
 namespace ballbar::acquisition {
 
 struct SessionOptions {
     std::chrono::milliseconds read_timeout{200};
-    /// Consecutive read timeouts before the instrument counts as silent (Fail).
+    /// Consecutive read timeouts while the program runs before the instrument counts as silent: the
+    /// program is abandoned (its missing points go to a retry program).
     int max_silent_reads = 150;
-    /// Reconnect attempts (each `read_timeout` long) before a paused session fails.
+    /// Reconnect attempts (each `read_timeout` long) before a paused session ends interrupted.
     int max_reconnect_attempts = 600;
     /// Samples between two progress reports.
     std::size_t progress_every = 100;
-    /// Set (from a SIGINT handler, say) to stop the session: it ends Aborted at the next read of the
-    /// instrument or the next thing that fails because of the signal, with `interrupted` set, so the
-    /// caller can keep it resumable. Must be lock-free (it is read, never written, here).
+    /// Stream time allowed from telling the operator to start a program (or to press cycle start) to
+    /// the program's first dwell, on top of the program's own timing.
+    double start_grace_s = 120;
+    /// The slowest feed override the timing allows for (moves take up to 1/override as long).
+    double slowest_feed_override = 0.5;
+    /// The slowest rapid assumed for G0 moves (mm/min).
+    double slowest_rapid_mm_min = 1000;
+    /// Programs a session runs before it stops with its missing points (resumable).
+    int max_programs = 8;
+    /// Set (from a SIGINT handler, say) to stop the session: it ends Aborted with `interrupted` set at
+    /// the next read or question, so the caller can keep it resumable.
     const std::atomic<bool>* stop = nullptr;
 };
 
 struct SessionSummary {
     State final_state = State::Connecting;
-    std::string reason;        ///< why it ended in Aborted/Failed
-    bool interrupted = false;  ///< ended because SessionOptions::stop was set (final_state Aborted)
+    std::string reason;                ///< why it ended in Aborted/Failed
+    bool interrupted = false;          ///< ended resumable (Ctrl-C, or points still missing); final_state Aborted
+    std::vector<std::size_t> missing;  ///< plan indices not captured when the session ended
     std::size_t samples = 0;
     std::size_t duplicates_dropped = 0;
-    std::size_t gaps = 0;  ///< sequence gaps seen (samples the instrument lost)
-    std::size_t recaptures = 0;
+    std::size_t gaps = 0;         ///< sequence gaps seen (samples the instrument lost)
+    std::size_t recaptures = 0;   ///< dwells attributed but failing their checks
+    std::size_t void_dwells = 0;  ///< dwells that could not be attributed (not stored)
     std::size_t pauses = 0;
+    std::size_t programs = 0;  ///< NC programs run (the first one and the retries)
     std::vector<TestResult> tests;
 };
 
@@ -50,30 +67,39 @@ class Session {
   public:
     Session(const Plan& plan, SampleSource& source, SessionSink& sink, Operator& op, SessionOptions options = {});
 
-    /// Points of an interrupted session, in plan order from its first point (resume).
+    /// Points of an interrupted session (any order, each at its planned place).
     void restore(std::span<const CapturedPoint> done);
-    /// Index of the first point still to capture.
-    std::size_t next_point() const { return captured_.size(); }
+    /// Plan indices still to capture.
+    std::vector<std::size_t> missing() const;
 
     SessionSummary run();
     State state() const { return sm_.state(); }
 
   private:
     class Stop {};  // unwinds run() when the session ends early
+    enum class RunEnd { Complete, Ended, Lost };
     void fire(Event e, std::string detail = {});
     void end(Event e, const std::string& reason);
-    bool stop_requested() const;  // SessionOptions::stop is set
-    void check_stop();            // ends the session (interrupted) once it is
+    void end_interrupted(const std::string& reason);
+    bool stop_requested() const;
+    void check_stop();
     void check_instrument();
     void set_up();
-    void measure_test(int test);
-    void capture_step(int test, int step);
-    void capture_point(const PlannedPoint& planned, bool first_of_step);
-    std::optional<WindowStats> wait_for_window(const PlannedPoint& planned, bool first_of_step);
-    void fetch();
-    void pause();
-    void compute(int test);
-    void report_progress(const PlannedPoint& planned);
+    void measure_missing();
+    RunEnd run_program(const std::vector<std::size_t>& points, bool retry);
+    void program_stops(const ProgramEntry& entry);
+    bool decide_failed_points();
+    void on_captured(const AttributionEvent& ev, std::size_t entry);
+    void on_void(const AttributionEvent& ev);
+    bool fetch();  // false: the instrument was lost (and is back, re-referenced)
+    void reference();
+    void stream_on();
+    void stream_off();
+    void compute_all();
+    bool review();
+    void report_progress();
+    double entry_timeout_s(const ProgramEntry& e) const;
+    double entry_time_s(const ProgramEntry& e) const;
 
     const Plan& plan_;
     SampleSource& source_;
@@ -82,15 +108,23 @@ class Session {
     SessionOptions options_;
     StateMachine sm_;
     InstrumentStatus status_;
-    std::vector<CapturedPoint> captured_;
-    std::vector<LocationResult> locations_;
+    std::vector<std::optional<CapturedPoint>> captured_;  ///< by plan index
+    std::vector<int> failures_;                           ///< failed checks per point since last decision
+    std::vector<std::optional<CapturedPoint>> best_failed_;
+    std::vector<std::string> failure_why_;
+    std::optional<AttributionSettings> attribution_settings_;
+    std::optional<DwellAttributor> attributor_;
+    std::optional<DwellDetector> manual_;
     std::array<analysis::BarSample, 256> buffer_{};
-    std::size_t buffer_n_ = 0, buffer_pos_ = 0;
+    std::size_t buffer_n_ = 0;
     std::optional<std::uint64_t> last_seq_;
     std::optional<std::uint64_t> first_time_us_;
-    std::optional<DwellDetector> detector_;
+    std::optional<std::uint64_t> stream_now_us_;
+    bool streaming_ = false;
     int silent_reads_ = 0;
-    bool broken_ = false;  ///< a gap or a pause since the last fetch
+    // The program being run (for progress).
+    const MeasuringProgram* program_ = nullptr;
+    std::size_t cursor_ = 0;
     SessionSummary summary_;
 };
 

@@ -12,37 +12,39 @@
 namespace ballbar::acquisition {
 
 enum class State {
-    Connecting,        ///< opening the instrument
-    InstrumentCheck,   ///< battery, temperature, reference set on the calibrator
-    SetUp,             ///< machine type and geometry, socket position, bar length, layout
-    Step1Positioning,  ///< the machine moves to the test's location with the rotary axes at their start
-    Step1Capture,      ///< SSM points of step 1 are captured
-    Step2Rotation,     ///< the rotary axes turn to the test's rotation pair (RTTTR-α: the socket is remounted)
-    Step2Capture,      ///< SSM points of step 2 are captured
-    Computing,         ///< SSM and the orientation model of the test
-    Review,            ///< the operator reviews the results
+    Connecting,       ///< opening the instrument
+    InstrumentCheck,  ///< battery, temperature, reference set on the calibrator, bar length
+    SetUp,            ///< machine type and geometry, socket position, bar length, layout
+    Running,          ///< an NC program runs; its dwells are attributed to points and captured
+    ProgramStop,      ///< the program waits at a program stop (M0) while the operator acts
+    Retry,            ///< a program ended with points missing; the operator decides on a retry program
+    Computing,        ///< SSM and the orientation model of every test
+    Review,           ///< the operator reviews the results
     Done,
-    Paused,   ///< the instrument was lost; continues at the same point when it is back
-    Aborted,  ///< stopped by the operator
+    Paused,   ///< the instrument was lost; continues when it is back (and re-referenced)
+    Aborted,  ///< stopped by the operator (or interrupted: resumable)
     Failed,   ///< cannot continue (instrument check failed, instrument gone for good, computation failed)
 };
 constexpr int kStateCount = static_cast<int>(State::Failed) + 1;
 
 enum class Event {
-    Connected,       ///< the instrument answered
-    CheckPassed,     ///< battery, temperature and reference are fine
-    SetUpConfirmed,  ///< the operator confirmed the set-up (or the plan answered for them)
-    InPosition,      ///< the machine reached the step's first point (positioning or rotation finished)
-    PointCaptured,   ///< one point of the current step was captured and passed its checks
-    PointRejected,   ///< one point failed its checks and will be captured again
-    StepComplete,    ///< every point of the current step is captured
-    NextTest,        ///< the test is computed and another test of the plan follows
-    AllTestsDone,    ///< the last test is computed
-    Accepted,        ///< the operator accepted the results
-    DeviceLost,      ///< the link to the instrument went away
-    DeviceBack,      ///< the instrument is back; the session continues where it was
-    Abort,           ///< the operator stopped the session
-    Fail,            ///< an unrecoverable error
+    Connected,           ///< the instrument answered
+    CheckPassed,         ///< battery, temperature, reference and bar length are fine
+    SetUpConfirmed,      ///< the operator confirmed the set-up and was told to start the program
+    PointCaptured,       ///< a dwell was attributed to its point and passed its checks: stored
+    PointRejected,       ///< a dwell was void (not attributable) or failed its checks: not stored
+    ProgramStopReached,  ///< the program reached a program stop; the operator is asked to act
+    CycleStart,          ///< the operator acted and pressed cycle start
+    ProgramEnded,        ///< the program ended (or timed out, or was abandoned) with points missing
+    AllPointsCaptured,   ///< every planned point is captured
+    RetryStarted,        ///< the operator runs a program for the missing points
+    ResultsReady,        ///< every test is computed
+    Accepted,            ///< the operator accepted the results
+    Rejected,            ///< the operator rejected the results: every point is measured again
+    DeviceLost,          ///< the link to the instrument went away
+    DeviceBack,          ///< the instrument is back and re-referenced
+    Abort,               ///< the operator stopped the session
+    Fail,                ///< an unrecoverable error
 };
 constexpr int kEventCount = static_cast<int>(Event::Fail) + 1;
 

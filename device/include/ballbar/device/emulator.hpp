@@ -51,18 +51,28 @@ struct FaultConfig {
     double disconnect_at_s = -1;          ///< the link goes away at this time (< 0: never) ...
     double disconnect_s = 0;              ///< ... and comes back after this long (streaming stopped)
     double reply_delay_ms = 0;            ///< replies are sent this late
+    double replay_frame_probability = 0;  ///< a stream frame is sent twice (same sequence number)
+    // The machine's side (applied by whoever runs its programs: the demo's operator).
+    double start_delay_s = 0;  ///< each program starts this long after the operator is told to start it
+    double feed_override = 1;  ///< feed override of the machine's G1 moves (G4 dwells keep their time)
 };
 
 struct NcSource {
     std::string text;
     analysis::NcDialect dialect = analysis::NcDialect::Fanuc;
+    /// Runs from power-on (true), or waits for cycle start (false): each Start request of the host is
+    /// the operator's cycle start (docs/emulator.md).
+    bool power_on = false;
+    /// When set, the program is read again from this file at a cycle start that begins a program (the
+    /// operator loaded a new one); a missing or unreadable file keeps the last text.
+    std::string file;
 };
 
 struct EmulatorConfig {
     std::uint64_t seed = 1;
     InstrumentModel instrument;
     MachineSetup machine;
-    std::optional<NcSource> program;  ///< run from power-on
+    std::optional<NcSource> program;  ///< the machine's program (power-on or cycle start)
     FaultConfig faults;
 };
 
@@ -99,9 +109,12 @@ class Emulator : public DeviceEndpoint {
     double bar_temp_C(std::uint64_t t_us) const;
 
     struct Counters {
-        std::uint64_t samples = 0;         ///< generated while streaming
-        std::uint64_t stream_frames = 0;   ///< sent
-        std::uint64_t dropped_frames = 0;  ///< by fault injection or overrun
+        std::uint64_t samples = 0;          ///< generated while streaming
+        std::uint64_t stream_frames = 0;    ///< sent
+        std::uint64_t dropped_frames = 0;   ///< by fault injection or overrun
+        std::uint64_t replayed_frames = 0;  ///< sent twice by fault injection
+        std::uint64_t cycle_starts = 0;     ///< host Start requests taken as cycle start
+        std::uint64_t programs_started = 0;
         std::uint64_t corrupted_bytes = 0;
         std::uint64_t requests = 0;
         std::uint64_t invalid_host_frames = 0;
@@ -115,6 +128,7 @@ class Emulator : public DeviceEndpoint {
         std::size_t size;
     };
     void handle(const protocol::FrameView& frame);
+    void cycle_start();
     void reply(const protocol::FrameBuffer& buf, std::size_t n);
     void emit(const protocol::FrameBuffer& buf, std::size_t n);
     void produce_samples_until(std::uint64_t t_us);
@@ -150,6 +164,8 @@ class Emulator : public DeviceEndpoint {
     protocol::StreamFrame pending_{};
     std::uint64_t pending_first_us_ = 0;
     Counters counters_;
+    bool program_started_ = false;
+    std::string loaded_program_;
 };
 
 }  // namespace ballbar::device

@@ -11,7 +11,9 @@
 
 #include <deque>
 #include <mutex>
+#include <optional>
 #include <string_view>
+#include <vector>
 
 #include "ballbar/analysis/error_params.hpp"
 #include "ballbar/analysis/kinematics.hpp"
@@ -36,7 +38,15 @@ class SimulatedMachine {
 
     const MachineSetup& setup() const { return setup_; }
     const analysis::ErrorParams& true_errors() const { return setup_.errors; }
-    analysis::Vec3 actual_socket_mm() const { return setup_.socket_mm + setup_.socket_offset_mm; }
+    analysis::Vec3 actual_socket_mm() const {
+        std::lock_guard lock(mutex_);
+        return setup_.socket_mm + setup_.socket_offset_mm;
+    }
+    /// The operator moved the socket to `nominal_mm` (table frame; its set-up offset stays).
+    void set_socket_mm(const analysis::Vec3& nominal_mm) {
+        std::lock_guard lock(mutex_);
+        setup_.socket_mm = nominal_mm;
+    }
 
     /// G1: straight move in axis space at `feed_mm_min` (rotary axes read it as deg/min; a mixed move
     /// takes the longer of the two). Starts when the queue ahead of it is done.
@@ -48,8 +58,24 @@ class SimulatedMachine {
     /// Queues every motion block of a program (modal axes carried from the end of the queue).
     void run_program(const analysis::NcProgram& program);
     void run_nc(std::string_view text, analysis::NcDialect dialect);
-    /// Drops the queued motion; the machine stops where it is at `t_s`.
+    /// Drops the queued motion (and a held program); the machine stops where it is at `t_s`.
     void stop(double t_s);
+
+    /// A program stop (M0/M00/M1/M01) holds the rest of the program until the operator presses cycle
+    /// start: true while the machine waits at one at `t_s`.
+    bool at_program_stop(double t_s);
+    /// A program's rest is held at a program stop (reached or still ahead of the machine).
+    bool holding() const {
+        std::lock_guard lock(mutex_);
+        return held_.has_value();
+    }
+    /// Cycle start: the held rest of the program runs from `t_s` (no effect when nothing is held). When
+    /// the comment before the stop says where the socket goes ("socket to [x, y, z]" or "socket
+    /// stands at [x, y, z]"), the emulated operator has put it there.
+    void cycle_start(double t_s);
+    /// Feed override (1 = 100 %) applied to G1 moves queued from now on; G4 dwells keep their time.
+    void set_feed_override(double factor);
+    double feed_override() const { return feed_override_; }
 
     /// Commanded pose at time `t_s` (must not go backwards between calls).
     analysis::Pose pose_at(double t_s);
@@ -70,6 +96,17 @@ class SimulatedMachine {
     };
     void enqueue(const analysis::Pose& target, double duration_s);
     analysis::Pose pose_locked(double t_s);
+    void queue_blocks(const analysis::NcProgram& program, const std::vector<analysis::Pose>& poses, std::size_t from,
+                      double feed);
+
+    struct Held {
+        analysis::NcProgram program;
+        std::vector<analysis::Pose> poses;
+        std::size_t next = 0;  ///< first block after the stop
+        double feed = 0;       ///< modal feed at the stop
+    };
+    std::optional<Held> held_;
+    double feed_override_ = 1.0;
 
     MachineSetup setup_;
     mutable std::mutex mutex_;
