@@ -24,7 +24,8 @@ inline circ::TestSpec to_test(const GenSpec& s) {
     t.feed_mm_min = s.feed_mm_min;
     t.feed_in_mm = s.feed_in_mm;
     for (const auto& r : s.runs)
-        t.runs.push_back({r.ccw ? circ::Direction::Ccw : circ::Direction::Cw, r.start_deg, r.overshoot_deg, r.data_arc_deg});
+        t.runs.push_back(
+            {r.ccw ? circ::Direction::Ccw : circ::Direction::Cw, r.start_deg, r.overshoot_deg, r.data_arc_deg});
     return t;
 }
 
@@ -44,26 +45,42 @@ struct Check {
 /// Radial µm per unit of each amplitude diagnostic, from the format's definitions.
 inline double radial_per_unit(int family, const GenSpec& s) {
     switch (family) {
-        case 0: case 1: return 0.5;                       // backlash: steps of ±b/2
-        case 4: case 5: return s.radius_mm * 1e-3 / 2.0;  // squareness, scale: R/2 per 1e-6
-        case 6: return s.feed_mm_min / 60.0 / 2.0;        // servo: v/2 µm per ms
-        case 9: case 10: return 2.0 / (3.0 * std::sqrt(3.0));
-        default: return 1.0;                               // spikes, cyclic, vibration
+        case 0:
+        case 1:
+            return 0.5;  // backlash: steps of ±b/2
+        case 4:
+        case 5:
+            return s.radius_mm * 1e-3 / 2.0;  // squareness, scale: R/2 per 1e-6
+        case 6:
+            return s.feed_mm_min / 60.0 / 2.0;  // servo: v/2 µm per ms
+        case 9:
+        case 10:
+            return 2.0 / (3.0 * std::sqrt(3.0));
+        default:
+            return 1.0;  // spikes, cyclic, vibration
     }
 }
 
 inline std::vector<Check> judge(const GenCase& c, const GenTrace& truth, const circ::CircularResult& r) {
     using circ::Diag;
-    const Diag diags[12] = {Diag::BacklashP, Diag::BacklashQ, Diag::SpikeP, Diag::SpikeQ, Diag::Squareness,
-                            Diag::ScaleMismatch, Diag::ServoMismatch, Diag::CyclicP, Diag::CyclicQ,
-                            Diag::StraightnessP, Diag::StraightnessQ, Diag::Vibration};
-    const char* names[12] = {"backlash_p", "backlash_q", "reversal_spike_p", "reversal_spike_q", "squareness",
-                             "scale_mismatch", "servo_mismatch", "cyclic_error_p", "cyclic_error_q",
-                             "straightness_p", "straightness_q", "vibration"};
+    const Diag diags[12] = {Diag::BacklashP,  Diag::BacklashQ,     Diag::SpikeP,        Diag::SpikeQ,
+                            Diag::Squareness, Diag::ScaleMismatch, Diag::ServoMismatch, Diag::CyclicP,
+                            Diag::CyclicQ,    Diag::StraightnessP, Diag::StraightnessQ, Diag::Vibration};
+    const char* names[12] = {"backlash_p",     "backlash_q",     "reversal_spike_p", "reversal_spike_q",
+                             "squareness",     "scale_mismatch", "servo_mismatch",   "cyclic_error_p",
+                             "cyclic_error_q", "straightness_p", "straightness_q",   "vibration"};
     const GenEffects& f = c.fx;
-    const double truths[12] = {f.backlash_um[0], f.backlash_um[1], f.spike_um[0], f.spike_um[1],
-                               f.squareness_um_per_m, f.scale_ppm[0] - f.scale_ppm[1], f.lag_ms[0] - f.lag_ms[1],
-                               f.cyclic_um[0], f.cyclic_um[1], f.straightness_um[0], f.straightness_um[1],
+    const double truths[12] = {f.backlash_um[0],
+                               f.backlash_um[1],
+                               f.spike_um[0],
+                               f.spike_um[1],
+                               f.squareness_um_per_m,
+                               f.scale_ppm[0] - f.scale_ppm[1],
+                               f.lag_ms[0] - f.lag_ms[1],
+                               f.cyclic_um[0],
+                               f.cyclic_um[1],
+                               f.straightness_um[0],
+                               f.straightness_um[1],
                                f.vibration_um};
     std::vector<Check> out;
     for (int i = 0; i < 12; ++i) {

@@ -59,7 +59,9 @@ std::function<std::array<double, 2>(double)> standing(double radius, double angl
 
 }  // namespace
 
-const char* plane_text(int plane) { return plane == 0 ? "XY" : plane == 1 ? "YZ" : "ZX"; }
+const char* plane_text(int plane) {
+    return plane == 0 ? "XY" : plane == 1 ? "YZ" : "ZX";
+}
 
 GenTrace generate(const GenSpec& spec, const GenEffects& fx, std::mt19937_64& rng) {
     const int ip = spec.plane == 0 ? 0 : spec.plane == 1 ? 1 : 2;
@@ -242,8 +244,10 @@ GenCase random_case(std::mt19937_64& rng, double p_effect) {
         f.lag_ms = {lag + 0.5 * mis, lag - 0.5 * mis};
     }
     const double max_pitch = std::min(20.0, R / 5.0);
-    if (c.present[7]) f.cyclic_um[0] = uni(0.5, 3.0), f.pitch_mm[0] = uni(2.5, max_pitch), f.cyclic_phase[0] = uni(0, 6.28);
-    if (c.present[8]) f.cyclic_um[1] = uni(0.5, 3.0), f.pitch_mm[1] = uni(2.5, max_pitch), f.cyclic_phase[1] = uni(0, 6.28);
+    if (c.present[7])
+        f.cyclic_um[0] = uni(0.5, 3.0), f.pitch_mm[0] = uni(2.5, max_pitch), f.cyclic_phase[0] = uni(0, 6.28);
+    if (c.present[8])
+        f.cyclic_um[1] = uni(0.5, 3.0), f.pitch_mm[1] = uni(2.5, max_pitch), f.cyclic_phase[1] = uni(0, 6.28);
     if (c.present[9]) f.straightness_um[0] = amp() / 0.3849;
     if (c.present[10]) f.straightness_um[1] = amp() / 0.3849;
     if (c.present[11]) {

@@ -36,8 +36,8 @@ struct GenEffects {
     std::array<double, 2> backlash_um{0, 0};
     std::array<double, 2> spike_um{0, 0};
     double squareness_um_per_m = 0.0;
-    std::array<double, 2> scale_ppm{0, 0};   ///< s_p, s_q
-    std::array<double, 2> lag_ms{10, 10};    ///< τ_p, τ_q
+    std::array<double, 2> scale_ppm{0, 0};  ///< s_p, s_q
+    std::array<double, 2> lag_ms{10, 10};   ///< τ_p, τ_q
     std::array<double, 2> cyclic_um{0, 0};
     std::array<double, 2> pitch_mm{5, 5};
     std::array<double, 2> cyclic_phase{0, 0};
