@@ -135,10 +135,9 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
         result.radial_min_um = std::min(result.radial_min_um, r.radial_min_um);
     }
     result.diagnostics = std::move(fit.diagnostics);
-    std::stable_sort(result.diagnostics.begin(), result.diagnostics.end(),
-                     [](const DiagnosticResult& a, const DiagnosticResult& b) {
-                         return a.contribution_um > b.contribution_um;
-                     });
+    std::stable_sort(
+        result.diagnostics.begin(), result.diagnostics.end(),
+        [](const DiagnosticResult& a, const DiagnosticResult& b) { return a.contribution_um > b.contribution_um; });
     result.unseparable = std::move(fit.unseparable);
     result.residual_rms_um = fit.residual_rms_um;
     result.mean_radius_um = fit.mean_radius_um;

@@ -8,16 +8,16 @@
 // covariance of the last linear solve scaled by the residual variance. Before fitting, the signatures
 // are taken in priority order and any that is (nearly) a combination of those before it is reported
 // unseparable instead of guessed.
+#include "circular_fit.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <numeric>
 #include <cstdio>
 #include <cstdlib>
+#include <numeric>
 #include <unsupported/Eigen/FFT>
-
-#include "circular_fit.hpp"
 
 namespace ballbar::analysis::circular::detail {
 namespace {
@@ -26,23 +26,52 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kSpikeDecay_s = 0.015;
 
 enum Col : int {
-    kConst, kCos, kSin, kBlP, kBlQ, kSpP, kSpQ, kScale, kSquare, kServo, kStrP, kStrQ,
+    kConst,
+    kCos,
+    kSin,
+    kBlP,
+    kBlQ,
+    kSpP,
+    kSpQ,
+    kScale,
+    kSquare,
+    kServo,
+    kStrP,
+    kStrQ,
     kBaseCount,
-    kCycPs = kBaseCount, kCycPc, kCycQs, kCycQc, kVibS, kVibC, kDkP, kDkQ, kDf,
+    kCycPs = kBaseCount,
+    kCycPc,
+    kCycQs,
+    kCycQc,
+    kVibS,
+    kVibC,
+    kDkP,
+    kDkQ,
+    kDf,
 };
 
 std::optional<Diag> col_diag(int col) {
     switch (col) {
-        case kBlP: return Diag::BacklashP;
-        case kBlQ: return Diag::BacklashQ;
-        case kSpP: return Diag::SpikeP;
-        case kSpQ: return Diag::SpikeQ;
-        case kScale: return Diag::ScaleMismatch;
-        case kSquare: return Diag::Squareness;
-        case kServo: return Diag::ServoMismatch;
-        case kStrP: return Diag::StraightnessP;
-        case kStrQ: return Diag::StraightnessQ;
-        default: return std::nullopt;
+        case kBlP:
+            return Diag::BacklashP;
+        case kBlQ:
+            return Diag::BacklashQ;
+        case kSpP:
+            return Diag::SpikeP;
+        case kSpQ:
+            return Diag::SpikeQ;
+        case kScale:
+            return Diag::ScaleMismatch;
+        case kSquare:
+            return Diag::Squareness;
+        case kServo:
+            return Diag::ServoMismatch;
+        case kStrP:
+            return Diag::StraightnessP;
+        case kStrQ:
+            return Diag::StraightnessQ;
+        default:
+            return std::nullopt;
     }
 }
 
@@ -85,6 +114,8 @@ double spike_value(double angle, int dir, double start, double omega) {
 class Model {
   public:
     Model(const FitInput& in) : in_(in), r_(in.test.radius_mm), w_(in.omega_rad_s) {
+        cos_.reserve(in.points.size()), sin_.reserve(in.points.size());
+        for (const auto& p : in.points) cos_.push_back(std::cos(p.theta)), sin_.push_back(std::sin(p.theta));
         const auto axis = plane_axis_index(in.test.plane);
         cp_ = in.test.centre_mm[static_cast<std::size_t>(axis[0])];
         cq_ = in.test.centre_mm[static_cast<std::size_t>(axis[1])];
@@ -93,10 +124,23 @@ class Model {
         t_mid_ = 0.5 * (lo + hi);
     }
 
-    double lag_um(const FitPoint& pt, double tau_p, double tau_q) const {
-        const double ap = 1.0 / std::hypot(1.0, w_ * tau_p), aq = 1.0 / std::hypot(1.0, w_ * tau_q);
-        const double c = ap * std::cos(pt.theta - pt.dir * std::atan(w_ * tau_p));
-        const double s = aq * std::sin(pt.theta - pt.dir * std::atan(w_ * tau_q));
+    /// The axes' steady-state response to the circle through first-order lags: amplitude and phase.
+    struct Lag {
+        double ap, aq, cp, sp, cq, sq;
+    };
+    Lag lag_of(double tau_p, double tau_q) const {
+        const double php = std::atan(w_ * tau_p), phq = std::atan(w_ * tau_q);
+        return {1.0 / std::hypot(1.0, w_ * tau_p),
+                1.0 / std::hypot(1.0, w_ * tau_q),
+                std::cos(php),
+                std::sin(php),
+                std::cos(phq),
+                std::sin(phq)};
+    }
+    /// Radial deviation (µm) the lags cause at a point, cos θ and sin θ given.
+    double lag_um(double c0, double s0, int dir, const Lag& l) const {
+        const double c = l.ap * (c0 * l.cp + dir * s0 * l.sp);
+        const double s = l.aq * (s0 * l.cq - dir * c0 * l.sq);
         return 1e3 * r_ * (std::sqrt(c * c + s * s) - 1.0);
     }
 
@@ -108,45 +152,87 @@ class Model {
         const bool servo = std::find(ids.begin(), ids.end(), kServo) != ids.end();
         const double tp = std::max(st.tau_mean_s + 0.5e-3 * st.dtau_ms, 0.0);
         const double tq = std::max(st.tau_mean_s - 0.5e-3 * st.dtau_ms, 0.0);
-        const double php = std::atan(w_ * tp), phq = std::atan(w_ * tq);
-        const double phm = std::atan(w_ * st.tau_mean_s);
+        const Lag lag0 = lag_of(tp, tq);
         constexpr double h_ms = 0.01;
+        const double up = 0.5e-3 * h_ms;
+        const Lag lag_hi = lag_of(tp + up, tq - up), lag_lo = lag_of(tp - up, tq + up);
+        const double phm = std::atan(w_ * st.tau_mean_s);
+        const double cm = std::cos(phm), sm = std::sin(phm);
+        const double php = std::atan(w_ * tp), phq = std::atan(w_ * tq);
         for (Eigen::Index i = 0; i < n; ++i) {
             const FitPoint& pt = in_.points[static_cast<std::size_t>(i)];
-            const double ta = pt.theta - pt.dir * phm, thp = pt.theta - pt.dir * php, thq = pt.theta - pt.dir * phq;
-            const double ca = std::cos(ta), sa = std::sin(ta);
-            const double lag = lag_um(pt, tp, tq);
+            const double c0 = cos_[static_cast<std::size_t>(i)], s0 = sin_[static_cast<std::size_t>(i)];
+            const int dir = pt.dir;
+            // cos and sin of θ − dir·φ for the mean lag and for each axis's own.
+            const double ca = c0 * cm + dir * s0 * sm, sa = s0 * cm - dir * c0 * sm;
+            const double cpx = c0 * lag0.cp + dir * s0 * lag0.sp, spx = s0 * lag0.cp - dir * c0 * lag0.sp;
+            const double cqx = c0 * lag0.cq + dir * s0 * lag0.sq, sqx = s0 * lag0.cq - dir * c0 * lag0.sq;
+            const double thp = pt.theta - dir * php, thq = pt.theta - dir * phq;
+            const double lag = lag_um(c0, s0, dir, lag0);
             double servo_col = 0.0;
-            if (servo) {
-                const double up = 0.5e-3 * h_ms;
-                servo_col = (lag_um(pt, tp + up, tq - up) - lag_um(pt, tp - up, tq + up)) / (2.0 * h_ms);
-            }
+            if (servo) servo_col = (lag_um(c0, s0, dir, lag_hi) - lag_um(c0, s0, dir, lag_lo)) / (2.0 * h_ms);
             d.y[i] = pt.y_um - (lag - servo_col * st.dtau_ms);
             // Cyclic phases about the centre: the same family as about the origin, better conditioned in k.
-            const double xp = r_ * std::cos(thp), xq = r_ * std::sin(thq);
+            const double xp = r_ * cpx, xq = r_ * sqx;
             const double tc = pt.t - t_mid_;
             const double start = pt.theta - pt.dir * pt.travelled;
             for (std::size_t c = 0; c < ids.size(); ++c) {
                 double v = 0.0;
                 switch (ids[c]) {
-                    case kConst: v = 1.0; break;
-                    case kCos: v = ca; break;
-                    case kSin: v = sa; break;
-                    case kBlP: v = 0.5 * pt.dir * (std::sin(thp) >= 0.0 ? 1.0 : -1.0) * ca; break;
-                    case kBlQ: v = -0.5 * pt.dir * (std::cos(thq) >= 0.0 ? 1.0 : -1.0) * sa; break;
-                    case kSpP: v = spike_value(thp, pt.dir, start, w_) * ca; break;
-                    case kSpQ: v = spike_value(thq - 0.5 * kPi, pt.dir, start - 0.5 * kPi, w_) * sa; break;
-                    case kScale: v = r_ * 1e-3 * 0.5 * (ca * ca - sa * sa); break;
-                    case kSquare: v = 1e-3 * (cq_ + r_ * sa) * ca; break;
-                    case kServo: v = servo_col; break;
-                    case kStrP: v = ca * ca * sa; break;
-                    case kStrQ: v = sa * sa * ca; break;
-                    case kCycPs: v = std::sin(2.0 * kPi * st.kp * xp) * ca; break;
-                    case kCycPc: v = std::cos(2.0 * kPi * st.kp * xp) * ca; break;
-                    case kCycQs: v = std::sin(2.0 * kPi * st.kq * xq) * sa; break;
-                    case kCycQc: v = std::cos(2.0 * kPi * st.kq * xq) * sa; break;
-                    case kVibS: v = std::sin(2.0 * kPi * st.f_hz * tc); break;
-                    case kVibC: v = std::cos(2.0 * kPi * st.f_hz * tc); break;
+                    case kConst:
+                        v = 1.0;
+                        break;
+                    case kCos:
+                        v = ca;
+                        break;
+                    case kSin:
+                        v = sa;
+                        break;
+                    case kBlP:
+                        v = 0.5 * pt.dir * (spx >= 0.0 ? 1.0 : -1.0) * ca;
+                        break;
+                    case kBlQ:
+                        v = -0.5 * pt.dir * (cqx >= 0.0 ? 1.0 : -1.0) * sa;
+                        break;
+                    case kSpP:
+                        v = spike_value(thp, pt.dir, start, w_) * ca;
+                        break;
+                    case kSpQ:
+                        v = spike_value(thq - 0.5 * kPi, pt.dir, start - 0.5 * kPi, w_) * sa;
+                        break;
+                    case kScale:
+                        v = r_ * 1e-3 * 0.5 * (ca * ca - sa * sa);
+                        break;
+                    case kSquare:
+                        v = 1e-3 * (cq_ + r_ * sa) * ca;
+                        break;
+                    case kServo:
+                        v = servo_col;
+                        break;
+                    case kStrP:
+                        v = ca * ca * sa;
+                        break;
+                    case kStrQ:
+                        v = sa * sa * ca;
+                        break;
+                    case kCycPs:
+                        v = std::sin(2.0 * kPi * st.kp * xp) * ca;
+                        break;
+                    case kCycPc:
+                        v = std::cos(2.0 * kPi * st.kp * xp) * ca;
+                        break;
+                    case kCycQs:
+                        v = std::sin(2.0 * kPi * st.kq * xq) * sa;
+                        break;
+                    case kCycQc:
+                        v = std::cos(2.0 * kPi * st.kq * xq) * sa;
+                        break;
+                    case kVibS:
+                        v = std::sin(2.0 * kPi * st.f_hz * tc);
+                        break;
+                    case kVibC:
+                        v = std::cos(2.0 * kPi * st.f_hz * tc);
+                        break;
                     case kDkP: {
                         const double a = 2.0 * kPi * st.kp * xp;
                         v = 2.0 * kPi * xp * (st.ap_s * std::cos(a) - st.ap_c * std::sin(a)) * ca;
@@ -162,7 +248,8 @@ class Model {
                         v = 2.0 * kPi * tc * (st.av_s * std::cos(a) - st.av_c * std::sin(a));
                         break;
                     }
-                    default: break;
+                    default:
+                        break;
                 }
                 d.x(i, static_cast<Eigen::Index>(c)) = v;
             }
@@ -184,6 +271,7 @@ class Model {
   private:
     const FitInput& in_;
     double r_, w_, cp_ = 0.0, cq_ = 0.0, t_mid_ = 0.0;
+    std::vector<double> cos_, sin_;
 };
 
 Solution solve(const Design& d) {
@@ -292,11 +380,11 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
     const double kmin = 4.0 / r, kmax = 1.0 / opt.min_pitch_mm;
     if (kmin >= kmax) return peak;
     const std::size_t n = in.points.size();
+    // Axis travel along the data (|dp| ≤ R dθ): the search samples each cycle at least 6 times.
     double path = 0.0;
     for (std::size_t i = 1; i < n; ++i)
-        if (in.points[i].run == in.points[i - 1].run)
-            path += std::abs(model.axis_position(in.points[i], st, axis) - model.axis_position(in.points[i - 1], st, axis));
-    const double wanted = std::max(2000.0, 10.0 * kmax * path);
+        if (in.points[i].run == in.points[i - 1].run) path += r * std::abs(in.points[i].theta - in.points[i - 1].theta);
+    const double wanted = std::max(2000.0, 6.0 * kmax * path);
     const std::size_t stride = std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(n) / wanted));
     std::vector<double> x, w, y;
     for (std::size_t i = 0; i < n; i += stride) {
@@ -318,7 +406,7 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
         if (as) *as = bs, *ac = bc;
         return bs * sys + bc * syc;
     };
-    const double dk = 1.0 / (10.0 * r);
+    const double dk = 1.0 / (8.0 * r);
     std::vector<std::complex<double>> z(m), step(m);
     for (std::size_t i = 0; i < m; ++i) {
         z[i] = std::polar(1.0, 2.0 * kPi * kmin * x[i]);
@@ -341,7 +429,7 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
     const double gr = (std::sqrt(5.0) - 1.0) / 2.0;
     double a = hi - gr * (hi - lo), b = lo + gr * (hi - lo);
     double fa = reduction_at(a, nullptr, nullptr), fb = reduction_at(b, nullptr, nullptr);
-    for (int it = 0; it < 30; ++it) {
+    for (int it = 0; it < 16; ++it) {
         if (fa > fb) {
             hi = b, b = a, fb = fa, a = hi - gr * (hi - lo), fa = reduction_at(a, nullptr, nullptr);
         } else {
@@ -449,7 +537,7 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
         if (sv >= 0) st.dtau_ms = sol.beta[sv];
         update_tau_mean();
     };
-    for (int it = 0; it < (servo ? 3 : 1); ++it) run_fit(ids);
+    run_fit(ids);
 
     // Cyclic errors and vibration, the strongest first, each searched on what the others left.
     bool want_p = true, want_q = true, want_v = true;
@@ -474,21 +562,22 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
     if (st.f_hz > 0.0) gn.push_back(kDf);
     const double dk = 1.0 / (10.0 * model.radius());
     const double fspan = 1.0 / std::max(2.0 * std::abs(in.points.back().t - model.t_mid()), 1e-3);
-    for (int it = 0; it < 4; ++it) {
+    // The last solve is the result: derivative columns included, so pitch and frequency carry
+    // uncertainties (their step there is the last correction, not applied).
+    const int iterations = gn.size() > ids.size() ? 2 : servo ? 1 : 0;
+    for (int it = 0; it < iterations; ++it) {
         auto take = [&](int s, int c, double& as, double& ac) {
             if (d.col(s) >= 0) as = sol.beta[d.col(s)], ac = sol.beta[d.col(c)];
         };
         take(kCycPs, kCycPc, st.ap_s, st.ap_c);
         take(kCycQs, kCycQc, st.aq_s, st.aq_c);
         take(kVibS, kVibC, st.av_s, st.av_c);
-        if (gn.size() == ids.size() && !servo) break;
         run_fit(gn);
+        if (it + 1 == iterations) break;
         if (d.col(kDkP) >= 0) st.kp += std::clamp(sol.beta[d.col(kDkP)], -dk, dk);
         if (d.col(kDkQ) >= 0) st.kq += std::clamp(sol.beta[d.col(kDkQ)], -dk, dk);
         if (d.col(kDf) >= 0) st.f_hz += std::clamp(sol.beta[d.col(kDf)], -fspan, fspan);
     }
-    // The final solve, derivative columns included so that pitch and frequency carry uncertainties.
-    run_fit(gn);
 
     out.residual_rms_um = sol.rms;
     out.mean_radius_um = sol.beta[d.col(kConst)];

@@ -9,20 +9,20 @@
 namespace ballbar::analysis::circular::detail {
 
 struct FitPoint {
-    double t = 0.0;        ///< trace time, s
-    double y_um = 0.0;     ///< measured − programmed radius
-    double theta = 0.0;    ///< commanded angle, rad (from +p towards +q)
-    double travelled = 0.0;///< commanded angle travelled since the run's arc began, rad (≥ 0)
-    int dir = 1;           ///< +1 ccw, −1 cw
+    double t = 0.0;          ///< trace time, s
+    double y_um = 0.0;       ///< measured − programmed radius
+    double theta = 0.0;      ///< commanded angle, rad (from +p towards +q)
+    double travelled = 0.0;  ///< commanded angle travelled since the run's arc began, rad (≥ 0)
+    int dir = 1;             ///< +1 ccw, −1 cw
     int run = 0;
 };
 
 struct FitInput {
     TestSpec test;
     std::vector<FitPoint> points;
-    std::vector<double> run_lag_s;     ///< lag found in each run's feed-in
-    std::vector<double> run_start_rad; ///< each run's start angle
-    double omega_rad_s = 0.0;          ///< angular speed of the arcs
+    std::vector<double> run_lag_s;      ///< lag found in each run's feed-in
+    std::vector<double> run_start_rad;  ///< each run's start angle
+    double omega_rad_s = 0.0;           ///< angular speed of the arcs
     double sample_rate_hz = 0.0;
     bool both_directions = false;
 };

@@ -11,9 +11,12 @@ namespace ballbar::analysis::circular {
 
 const char* plane_name(Plane plane) {
     switch (plane) {
-        case Plane::XY: return "XY";
-        case Plane::YZ: return "YZ";
-        case Plane::ZX: return "ZX";
+        case Plane::XY:
+            return "XY";
+        case Plane::YZ:
+            return "YZ";
+        case Plane::ZX:
+            return "ZX";
     }
     return "?";
 }
@@ -25,7 +28,9 @@ std::optional<Plane> parse_plane(const std::string& text) {
     return std::nullopt;
 }
 
-const char* direction_name(Direction direction) { return direction == Direction::Ccw ? "ccw" : "cw"; }
+const char* direction_name(Direction direction) {
+    return direction == Direction::Ccw ? "ccw" : "cw";
+}
 
 std::optional<Direction> parse_direction(const std::string& text) {
     if (text == "ccw") return Direction::Ccw;
@@ -35,18 +40,24 @@ std::optional<Direction> parse_direction(const std::string& text) {
 
 std::array<char, 2> plane_axes(Plane plane) {
     switch (plane) {
-        case Plane::XY: return {'x', 'y'};
-        case Plane::YZ: return {'y', 'z'};
-        case Plane::ZX: return {'z', 'x'};
+        case Plane::XY:
+            return {'x', 'y'};
+        case Plane::YZ:
+            return {'y', 'z'};
+        case Plane::ZX:
+            return {'z', 'x'};
     }
     return {'x', 'y'};
 }
 
 std::array<int, 2> plane_axis_index(Plane plane) {
     switch (plane) {
-        case Plane::XY: return {0, 1};
-        case Plane::YZ: return {1, 2};
-        case Plane::ZX: return {2, 0};
+        case Plane::XY:
+            return {0, 1};
+        case Plane::YZ:
+            return {1, 2};
+        case Plane::ZX:
+            return {2, 0};
     }
     return {0, 1};
 }
@@ -76,34 +87,55 @@ std::string diagnostic_key(Diag diag, Plane plane) {
     const auto axes = plane_axes(plane);
     const std::string p(1, axes[0]), q(1, axes[1]);
     switch (diag) {
-        case Diag::BacklashP: return "backlash_" + p + "_um";
-        case Diag::BacklashQ: return "backlash_" + q + "_um";
-        case Diag::SpikeP: return "reversal_spike_" + p + "_um";
-        case Diag::SpikeQ: return "reversal_spike_" + q + "_um";
-        case Diag::Squareness: return "squareness_um_per_m";
-        case Diag::ScaleMismatch: return "scale_mismatch_ppm";
-        case Diag::ServoMismatch: return "servo_mismatch_ms";
-        case Diag::CyclicP: return "cyclic_error_" + p + "_um";
-        case Diag::CyclicPitchP: return "cyclic_pitch_" + p + "_mm";
-        case Diag::CyclicQ: return "cyclic_error_" + q + "_um";
-        case Diag::CyclicPitchQ: return "cyclic_pitch_" + q + "_mm";
-        case Diag::StraightnessP: return "straightness_" + p + "_um";
-        case Diag::StraightnessQ: return "straightness_" + q + "_um";
-        case Diag::Vibration: return "vibration_um";
-        case Diag::VibrationHz: return "vibration_hz";
+        case Diag::BacklashP:
+            return "backlash_" + p + "_um";
+        case Diag::BacklashQ:
+            return "backlash_" + q + "_um";
+        case Diag::SpikeP:
+            return "reversal_spike_" + p + "_um";
+        case Diag::SpikeQ:
+            return "reversal_spike_" + q + "_um";
+        case Diag::Squareness:
+            return "squareness_um_per_m";
+        case Diag::ScaleMismatch:
+            return "scale_mismatch_ppm";
+        case Diag::ServoMismatch:
+            return "servo_mismatch_ms";
+        case Diag::CyclicP:
+            return "cyclic_error_" + p + "_um";
+        case Diag::CyclicPitchP:
+            return "cyclic_pitch_" + p + "_mm";
+        case Diag::CyclicQ:
+            return "cyclic_error_" + q + "_um";
+        case Diag::CyclicPitchQ:
+            return "cyclic_pitch_" + q + "_mm";
+        case Diag::StraightnessP:
+            return "straightness_" + p + "_um";
+        case Diag::StraightnessQ:
+            return "straightness_" + q + "_um";
+        case Diag::Vibration:
+            return "vibration_um";
+        case Diag::VibrationHz:
+            return "vibration_hz";
     }
     return "?";
 }
 
 const char* diagnostic_unit(Diag diag) {
     switch (diag) {
-        case Diag::Squareness: return "um/m";
-        case Diag::ScaleMismatch: return "ppm";
-        case Diag::ServoMismatch: return "ms";
+        case Diag::Squareness:
+            return "um/m";
+        case Diag::ScaleMismatch:
+            return "ppm";
+        case Diag::ServoMismatch:
+            return "ms";
         case Diag::CyclicPitchP:
-        case Diag::CyclicPitchQ: return "mm";
-        case Diag::VibrationHz: return "Hz";
-        default: return "um";
+        case Diag::CyclicPitchQ:
+            return "mm";
+        case Diag::VibrationHz:
+            return "Hz";
+        default:
+            return "um";
     }
 }
 
@@ -111,20 +143,26 @@ double radial_um_per_unit(Diag diag, const TestSpec& test) {
     const double speed_mm_s = test.feed_mm_min / 60.0;
     switch (diag) {
         case Diag::BacklashP:
-        case Diag::BacklashQ: return 0.5;  // the trace steps by ±b/2 about the mean
+        case Diag::BacklashQ:
+            return 0.5;  // the trace steps by ±b/2 about the mean
         case Diag::SpikeP:
         case Diag::SpikeQ:
         case Diag::CyclicP:
         case Diag::CyclicQ:
-        case Diag::Vibration: return 1.0;
+        case Diag::Vibration:
+            return 1.0;
         case Diag::Squareness:
-        case Diag::ScaleMismatch: return test.radius_mm * 1e-3 / 2.0;  // R/2 · 1e-6, in µm
-        case Diag::ServoMismatch: return speed_mm_s / 2.0;              // v·Δτ/2, µm per ms
+        case Diag::ScaleMismatch:
+            return test.radius_mm * 1e-3 / 2.0;  // R/2 · 1e-6, in µm
+        case Diag::ServoMismatch:
+            return speed_mm_s / 2.0;  // v·Δτ/2, µm per ms
         case Diag::StraightnessP:
-        case Diag::StraightnessQ: return 2.0 / (3.0 * std::sqrt(3.0));  // max of cos²θ·sinθ
+        case Diag::StraightnessQ:
+            return 2.0 / (3.0 * std::sqrt(3.0));  // max of cos²θ·sinθ
         case Diag::CyclicPitchP:
         case Diag::CyclicPitchQ:
-        case Diag::VibrationHz: return 0.0;
+        case Diag::VibrationHz:
+            return 0.0;
     }
     return 0.0;
 }
@@ -152,8 +190,7 @@ double crossing_time(const std::vector<TraceSample>& s, std::size_t before, doub
 
 }  // namespace
 
-std::optional<FeedIn> find_feed_in(const TestSpec& test, const std::vector<TraceSample>& samples,
-                                   std::size_t from) {
+std::optional<FeedIn> find_feed_in(const TestSpec& test, const std::vector<TraceSample>& samples, std::size_t from) {
     const double speed = test.feed_mm_min / 60.0;
     const double depth = test.feed_in_mm;
     const double duration = depth / speed;

@@ -32,7 +32,8 @@ VolumetricResult combine_volumetric(const std::vector<CircularResult>& planes) {
         f.key = std::string("squareness_") + axes[0] + axes[1] + "_um_per_m";
         for (const auto& r : planes)
             if (r.test.plane == plane)
-                if (const auto* d = usable(r, Diag::Squareness)) f.value = d->value, f.std_uncertainty = d->std_uncertainty, f.known = true;
+                if (const auto* d = usable(r, Diag::Squareness))
+                    f.value = d->value, f.std_uncertainty = d->std_uncertainty, f.known = true;
         out.figures.push_back(f);
     }
     // Backlash of each axis: weighted mean over the planes that contain it.

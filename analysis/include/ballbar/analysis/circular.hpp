@@ -91,11 +91,11 @@ double radial_um_per_unit(Diag diag, const TestSpec& test);
 
 struct RunResult {
     Direction direction = Direction::Ccw;
-    double feed_in_end_s = 0.0;   ///< commanded end of the feed-in, found in the data
-    double servo_lag_s = 0.0;     ///< first-order lag of the feed-in's motion, found in the data
-    double data_start_s = 0.0;    ///< time the data arc starts and ends
+    double feed_in_end_s = 0.0;  ///< commanded end of the feed-in, found in the data
+    double servo_lag_s = 0.0;    ///< first-order lag of the feed-in's motion, found in the data
+    double data_start_s = 0.0;   ///< time the data arc starts and ends
     double data_end_s = 0.0;
-    std::size_t first_sample = 0; ///< samples [first, last) of the trace are the data arc
+    std::size_t first_sample = 0;  ///< samples [first, last) of the trace are the data arc
     std::size_t last_sample = 0;
     double circularity_um = 0.0;  ///< G: least-squares centre, max − min radial deviation
     double radial_max_um = 0.0;   ///< F over this run: measured − programmed radius
@@ -107,17 +107,17 @@ struct DiagnosticResult {
     std::string key;
     double value = 0.0;
     double std_uncertainty = 0.0;
-    bool detected = true;        ///< cyclic error and vibration: a significant peak was found
-    double share_percent = 0.0;  ///< of the sum of all diagnostics' peak-to-valley contributions
-    double contribution_um = 0.0;///< peak-to-valley of this effect's radial signature over the data
+    bool detected = true;          ///< cyclic error and vibration: a significant peak was found
+    double share_percent = 0.0;    ///< of the sum of all diagnostics' peak-to-valley contributions
+    double contribution_um = 0.0;  ///< peak-to-valley of this effect's radial signature over the data
 };
 
 /// Effects whose radial signatures coincide on this data: only their combination is known.
 struct UnseparableGroup {
     std::vector<std::string> keys;  ///< diagnostic keys (and "centre" for the set-up offset)
     std::string reason;
-    std::string combined_key;       ///< the fit's column that carries the combination (may be empty)
-    double combined_value = 0.0;    ///< in combined_key's unit
+    std::string combined_key;     ///< the fit's column that carries the combination (may be empty)
+    double combined_value = 0.0;  ///< in combined_key's unit
     double combined_std = 0.0;
 };
 
@@ -129,8 +129,8 @@ struct CircularResult {
     double radial_min_um = 0.0;
     std::vector<DiagnosticResult> diagnostics;  ///< separable ones, ranked by share (largest first)
     std::vector<UnseparableGroup> unseparable;
-    double residual_rms_um = 0.0;            ///< after removing the centre and every diagnosis
-    double mean_radius_um = 0.0;             ///< fitted mean of measured − programmed radius
+    double residual_rms_um = 0.0;  ///< after removing the centre and every diagnosis
+    double mean_radius_um = 0.0;   ///< fitted mean of measured − programmed radius
     double mean_radius_std_um = 0.0;
     std::size_t samples_used = 0;
     double sample_rate_hz = 0.0;
@@ -156,8 +156,7 @@ struct FeedIn {
     double standing_mm = 0.0;    ///< bar length before the move
     std::size_t index = 0;       ///< first sample after the move's half-way point
 };
-std::optional<FeedIn> find_feed_in(const TestSpec& test, const std::vector<TraceSample>& samples,
-                                   std::size_t from);
+std::optional<FeedIn> find_feed_in(const TestSpec& test, const std::vector<TraceSample>& samples, std::size_t from);
 
 // ---- volumetric: an XY full circle with YZ and ZX (partial) arcs ----
 
