@@ -150,7 +150,8 @@ void print_circle_result(std::ostream& os, const circ::CircularResult& r, const 
         for (std::size_t i = 0; i < g.keys.size(); ++i) os << (i ? " + " : "") << g.keys[i];
         os << " (" << g.reason << ")";
         if (!g.combined_key.empty())
-            os << "; together as " << g.combined_key << " " << fmt(g.combined_value, 3) << " ± " << fmt(g.combined_std, 3);
+            os << "; together as " << g.combined_key << " " << fmt(g.combined_value, 3) << " ± "
+               << fmt(g.combined_std, 3);
         os << '\n';
     }
     os << "residual RMS after the diagnosis: " << fmt(r.residual_rms_um, 3) << " um\n";
@@ -167,8 +168,10 @@ void print_volumetric(std::ostream& os, const circ::VolumetricResult& v) {
     os << "volumetric summary:\n";
     for (const auto& f : v.figures) {
         os << "  " << f.key << ": ";
-        if (f.known) os << fmt(f.value, 3) << " ± " << fmt(f.std_uncertainty, 3) << '\n';
-        else os << "not determined by these planes\n";
+        if (f.known)
+            os << fmt(f.value, 3) << " ± " << fmt(f.std_uncertainty, 3) << '\n';
+        else
+            os << "not determined by these planes\n";
     }
 }
 
@@ -196,7 +199,8 @@ json controller_json(const circ::CircularResult& r, const std::string& controlle
             e["scale_ppm"] = *a.scale_ppm;
             e["steps_per_mm_factor"] = factor;
             if (controller == "linuxcnc")
-                e["scale_setting"] = "[JOINT_" + std::to_string(a.index) + "] SCALE = current SCALE × " + fmt(factor, 7);
+                e["scale_setting"] =
+                    "[JOINT_" + std::to_string(a.index) + "] SCALE = current SCALE × " + fmt(factor, 7);
             else if (controller == "grblhal")
                 e["scale_setting"] = std::string(grbl_steps[a.index]) + " = current × " + fmt(factor, 7);
             else

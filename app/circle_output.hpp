@@ -15,8 +15,8 @@ namespace ballbar::app {
 
 nlohmann::ordered_json circle_result_json(const analysis::circular::CircularResult& r, const storage::TraceFile& trace,
                                           std::optional<double> tolerance_um);
-void print_circle_result(std::ostream& os, const analysis::circular::CircularResult& r,
-                         const storage::TraceFile& trace, std::optional<double> tolerance_um);
+void print_circle_result(std::ostream& os, const analysis::circular::CircularResult& r, const storage::TraceFile& trace,
+                         std::optional<double> tolerance_um);
 nlohmann::ordered_json volumetric_json(const analysis::circular::VolumetricResult& v);
 void print_volumetric(std::ostream& os, const analysis::circular::VolumetricResult& v);
 /// controller: linuxcnc, marlin, smoothieware, grblhal.

@@ -34,7 +34,7 @@ struct PlanOptions {
     double feed_in_mm = 1.5;
     double overshoot_deg = -1.0;  // <0: 45 for a full circle, 20 for a partial arc
     double arc_deg = 360.0;
-    double start_deg = 1e9;       // default: 0 (full) or −overshoot (partial)
+    double start_deg = 1e9;  // default: 0 (full) or −overshoot (partial)
     std::string directions = "both";
     std::string dialect;
     std::string machine_file;
@@ -57,7 +57,8 @@ circ::TestSpec plan_test(const PlanOptions& o) {
     const double over = o.overshoot_deg >= 0.0 ? o.overshoot_deg : full ? 45.0 : 20.0;
     const double start = o.start_deg < 1e8 ? o.start_deg : full ? 0.0 : -over;
     const double end = start + 2.0 * over + o.arc_deg;
-    if (o.directions == "both" || o.directions == "ccw") t.runs.push_back({circ::Direction::Ccw, start, over, o.arc_deg});
+    if (o.directions == "both" || o.directions == "ccw")
+        t.runs.push_back({circ::Direction::Ccw, start, over, o.arc_deg});
     if (o.directions == "both") t.runs.push_back({circ::Direction::Cw, end, over, o.arc_deg});
     if (o.directions == "cw") t.runs.push_back({circ::Direction::Cw, start, over, o.arc_deg});
     if (const auto bad = t.validate(); !bad.empty()) throw CliError(kExitUsage, bad);
@@ -109,7 +110,9 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
         if (with_feed) out += " F" + num(t.feed_mm_min);
         out += '\n';
     };
-    auto dwell = [&] { out += fanuc ? "G4 P" + std::to_string(std::lround(dwell_s * 1000.0)) + "\n" : "G4 P" + num(dwell_s) + "\n"; };
+    auto dwell = [&] {
+        out += fanuc ? "G4 P" + std::to_string(std::lround(dwell_s * 1000.0)) + "\n" : "G4 P" + num(dwell_s) + "\n";
+    };
     out += gplane;
     out += '\n';
     comment("plane " + std::string(circ::plane_name(t.plane)) + ", radius " + num(t.radius_mm) + " mm, feed " +
@@ -117,8 +120,9 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
     for (std::size_t k = 0; k < t.runs.size(); ++k) {
         const circ::RunSpec& r = t.runs[k];
         const double sg = r.direction == circ::Direction::Ccw ? 1.0 : -1.0;
-        comment("run " + std::to_string(k + 1) + ": " + circ::direction_name(r.direction) + " from " + num(r.start_deg) +
-                " deg, overshoot " + num(r.overshoot_deg) + " deg, data arc " + num(r.data_arc_deg) + " deg");
+        comment("run " + std::to_string(k + 1) + ": " + circ::direction_name(r.direction) + " from " +
+                num(r.start_deg) + " deg, overshoot " + num(r.overshoot_deg) + " deg, data arc " + num(r.data_arc_deg) +
+                " deg");
         if (k == 0) move("G0", point(t.radius_mm + t.feed_in_mm, r.start_deg), false);
         dwell();
         move("G1", point(t.radius_mm, r.start_deg), true);  // feed-in
@@ -299,7 +303,8 @@ BALLBAR_COMMAND(circle) {
     plan->add_option("--centre", po->centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
     plan->add_option("--feed", po->feed_mm_min, "feed of every move, mm/min")->capture_default_str();
     plan->add_option("--feed-in", po->feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
-    plan->add_option("--arc", po->arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")->capture_default_str();
+    plan->add_option("--arc", po->arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
+        ->capture_default_str();
     plan->add_option("--overshoot", po->overshoot_deg, "overshoot each side, degrees (default 45 full, 20 partial)");
     plan->add_option("--start", po->start_deg, "start angle of the first run, degrees (default 0 / −overshoot)");
     plan->add_option("--directions", po->directions, "both, ccw or cw")
@@ -307,7 +312,8 @@ BALLBAR_COMMAND(circle) {
         ->capture_default_str();
     plan->add_option("--dialect", po->dialect, "fanuc or linuxcnc (default: the machine file's, else fanuc)");
     plan->add_option("--machine", po->machine_file, "machine file: travel limits and dialect");
-    plan->add_option("--dwell", po->dwell_s, "stand still before each feed-in and at the end, s")->capture_default_str();
+    plan->add_option("--dwell", po->dwell_s, "stand still before each feed-in and at the end, s")
+        ->capture_default_str();
     plan->add_option("--out", po->out, "program file (- for stdout)")->capture_default_str();
     plan->add_option("--test-out", po->test_out, "write the test header (JSON) to this file too");
     plan->callback([po, &globals] { globals.action = [po] { return run_plan(*po); }; });
@@ -319,7 +325,8 @@ BALLBAR_COMMAND(circle) {
     an->add_flag("--json", ao->json, "print the result as JSON");
     an->add_flag("--store", ao->store, "import a trace file as a session and store the result with it");
     an->add_option("--tolerance", ao->tolerance_um, "circular deviation G allowed, µm: pass/fail (exit 1 on fail)");
-    an->add_option("--controller", ao->controller, "print backlash/scale settings: linuxcnc, marlin, smoothieware, grblhal")
+    an->add_option("--controller", ao->controller,
+                   "print backlash/scale settings: linuxcnc, marlin, smoothieware, grblhal")
         ->check(CLI::IsMember({"linuxcnc", "marlin", "smoothieware", "grblhal"}));
     an->callback([ao, &globals] { globals.action = [ao, &globals] { return run_analyze(*ao, globals); }; });
 }

@@ -19,10 +19,14 @@ int main(int argc, char** argv) {
     unsigned long long seed = 1;
     bool verbose = false;
     for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--cases") && i + 1 < argc) cases = std::atoi(argv[++i]);
-        else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) seed = std::strtoull(argv[++i], nullptr, 10);
-        else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = std::atoi(argv[++i]);
-        else if (!std::strcmp(argv[i], "--verbose")) verbose = true;
+        if (!std::strcmp(argv[i], "--cases") && i + 1 < argc)
+            cases = std::atoi(argv[++i]);
+        else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc)
+            seed = std::strtoull(argv[++i], nullptr, 10);
+        else if (!std::strcmp(argv[i], "--only") && i + 1 < argc)
+            only = std::atoi(argv[++i]);
+        else if (!std::strcmp(argv[i], "--verbose"))
+            verbose = true;
         else {
             std::fprintf(stderr, "usage: bench_circular_accuracy [--cases N] [--seed S] [--only I] [--verbose]\n");
             return 2;
@@ -66,10 +70,10 @@ int main(int argc, char** argv) {
             }
             if (!k.pass) {
                 ok = false;
-                std::printf("case %d (%s R %.1f F %.0f arc %.0f fs %.0f): %s %s %.4g found %.4g (error %.3g > %.3g)\n", i,
-                            plane_text(c.spec.plane), c.spec.radius_mm, c.spec.feed_mm_min, c.spec.runs[0].data_arc_deg,
-                            c.spec.sample_hz, k.name.c_str(), k.injected ? "injected" : "absent", k.truth, k.estimate,
-                            k.error, k.tolerance);
+                std::printf("case %d (%s R %.1f F %.0f arc %.0f fs %.0f): %s %s %.4g found %.4g (error %.3g > %.3g)\n",
+                            i, plane_text(c.spec.plane), c.spec.radius_mm, c.spec.feed_mm_min,
+                            c.spec.runs[0].data_arc_deg, c.spec.sample_hz, k.name.c_str(),
+                            k.injected ? "injected" : "absent", k.truth, k.estimate, k.error, k.tolerance);
             } else if (verbose) {
                 std::printf("case %d: %s %.4g found %.4g\n", i, k.name.c_str(), k.truth, k.estimate);
             }
@@ -77,8 +81,10 @@ int main(int argc, char** argv) {
         failed_cases += !ok;
     }
     std::printf("\n%d cases (seed %llu), %d with a failed check, %d refused; analysis %.1f ms per case (mean)\n\n",
-                only >= 0 ? 1 : cases, seed, failed_cases, thrown, 1e3 * analysis_s / std::max(1, only >= 0 ? 1 : cases));
-    std::printf("| diagnostic | injected | pass | max error / tolerance | absent | pass | max reported / tolerance |\n");
+                only >= 0 ? 1 : cases, seed, failed_cases, thrown,
+                1e3 * analysis_s / std::max(1, only >= 0 ? 1 : cases));
+    std::printf(
+        "| diagnostic | injected | pass | max error / tolerance | absent | pass | max reported / tolerance |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
     for (const auto& [name, row] : table) {
         std::printf("| %s | %d | %.1f %% | %.2f | %d | %.1f %% | %.2f |\n", name.c_str(), row.injected,

@@ -23,12 +23,15 @@ int main(int argc, char** argv) {
     int plane = 0;
     bool partial = false;
     for (int i = 2; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--samples") && i + 1 < argc) samples = std::atol(argv[++i]);
-        else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) seed = std::strtoull(argv[++i], nullptr, 10);
+        if (!std::strcmp(argv[i], "--samples") && i + 1 < argc)
+            samples = std::atol(argv[++i]);
+        else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc)
+            seed = std::strtoull(argv[++i], nullptr, 10);
         else if (!std::strcmp(argv[i], "--plane") && i + 1 < argc) {
             const std::string p = argv[++i];
             plane = p == "YZ" ? 1 : p == "ZX" ? 2 : 0;
-        } else if (!std::strcmp(argv[i], "--partial")) partial = true;
+        } else if (!std::strcmp(argv[i], "--partial"))
+            partial = true;
     }
     std::mt19937_64 rng(seed);
     GenCase c = random_case(rng, 0.5);
@@ -41,7 +44,8 @@ int main(int argc, char** argv) {
     // The sample rate that makes the whole recording `samples` long.
     const double arc_s = [&] {
         double s = 0;
-        for (const auto& r : c.spec.runs) s += (2 * r.overshoot_deg + r.data_arc_deg) * M_PI / 180.0 * c.spec.radius_mm / (c.spec.feed_mm_min / 60.0);
+        for (const auto& r : c.spec.runs)
+            s += (2 * r.overshoot_deg + r.data_arc_deg) * M_PI / 180.0 * c.spec.radius_mm / (c.spec.feed_mm_min / 60.0);
         return s;
     }();
     c.spec.sample_hz = static_cast<double>(samples) / (arc_s + 2.0);

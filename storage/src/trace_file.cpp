@@ -96,7 +96,8 @@ std::vector<std::string> split_lines(std::string_view text) {
     std::size_t start = 0;
     while (start <= text.size()) {
         const auto end = text.find('\n', start);
-        std::string_view line = text.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
+        std::string_view line =
+            text.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
         lines.emplace_back(line);
         if (end == std::string_view::npos) break;
@@ -115,15 +116,14 @@ bool is_key(std::string_view k) {
 
 }  // namespace
 
-bool looks_like_trace(std::string_view text) { return text.rfind("# ballbar-trace/", 0) == 0; }
+bool looks_like_trace(std::string_view text) {
+    return text.rfind("# ballbar-trace/", 0) == 0;
+}
 
 std::string test_json(const circ::TestSpec& t) {
-    json j = {{"kind", "circular"},
-              {"plane", circ::plane_name(t.plane)},
-              {"radius_mm", t.radius_mm},
-              {"centre_mm", {t.centre_mm[0], t.centre_mm[1], t.centre_mm[2]}},
-              {"feed_mm_min", t.feed_mm_min},
-              {"feed_in_mm", t.feed_in_mm}};
+    json j = {{"kind", "circular"},           {"plane", circ::plane_name(t.plane)},
+              {"radius_mm", t.radius_mm},     {"centre_mm", {t.centre_mm[0], t.centre_mm[1], t.centre_mm[2]}},
+              {"feed_mm_min", t.feed_mm_min}, {"feed_in_mm", t.feed_in_mm}};
     json runs = json::array();
     for (const auto& r : t.runs)
         runs.push_back({{"direction", circ::direction_name(r.direction)},
@@ -139,7 +139,8 @@ TraceFile parse_trace(std::string_view text) {
     if (lines.empty()) throw TraceFileError(1, "empty file");
     if (lines[0] != kMagic) {
         if (lines[0].rfind("# ballbar-trace/", 0) == 0)
-            throw TraceFileError(1, "unsupported format version \"" + lines[0].substr(2) + "\" (this is ballbar-trace/1)");
+            throw TraceFileError(1,
+                                 "unsupported format version \"" + lines[0].substr(2) + "\" (this is ballbar-trace/1)");
         throw TraceFileError(1, "not a ballbar-trace/1 file (the first line must be \"# ballbar-trace/1\")");
     }
     TraceFile out;
@@ -157,8 +158,8 @@ TraceFile parse_trace(std::string_view text) {
         const std::string key(body.substr(0, colon));
         const std::string value(trim(body.substr(colon + 1)));
         static const char* known[] = {"test", "instrument", "machine", "operator", "started_at", "notes"};
-        const bool is_known = std::find_if(std::begin(known), std::end(known), [&](const char* k) { return key == k; }) !=
-                              std::end(known);
+        const bool is_known = std::find_if(std::begin(known), std::end(known),
+                                           [&](const char* k) { return key == k; }) != std::end(known);
         json j;
         try {
             j = json::parse(value);
@@ -187,7 +188,9 @@ TraceFile parse_trace(std::string_view text) {
             out.machine_json = j.dump();
         } else if (key == "operator" || key == "started_at" || key == "notes") {
             if (!j.is_string()) throw TraceFileError(no, "\"" + key + "\" must be a JSON string");
-            (key == "operator" ? out.operator_name : key == "notes" ? out.notes : out.started_at) = j.get<std::string>();
+            (key == "operator" ? out.operator_name
+             : key == "notes"  ? out.notes
+                               : out.started_at) = j.get<std::string>();
         } else {
             out.extra.emplace_back(key, j.dump());
         }
@@ -209,11 +212,16 @@ TraceFile parse_trace(std::string_view text) {
         for (std::size_t m = 0; m < k; ++m)
             if (cols[m] == cols[k]) throw TraceFileError(header_no, "column \"" + cols[k] + "\" appears twice");
         const int idx = static_cast<int>(k);
-        if (cols[k] == "time_s") c_time = idx;
-        else if (cols[k] == "measured_mm") c_len = idx;
-        else if (cols[k] == "bar_temp_C") c_bar = idx;
-        else if (cols[k] == "air_temp_C") c_air = idx;
-        else unknown.push_back(cols[k]);
+        if (cols[k] == "time_s")
+            c_time = idx;
+        else if (cols[k] == "measured_mm")
+            c_len = idx;
+        else if (cols[k] == "bar_temp_C")
+            c_bar = idx;
+        else if (cols[k] == "air_temp_C")
+            c_air = idx;
+        else
+            unknown.push_back(cols[k]);
     }
     if (c_time < 0) throw TraceFileError(header_no, "missing column \"time_s\"");
     if (c_len < 0) throw TraceFileError(header_no, "missing column \"measured_mm\"");
@@ -237,12 +245,16 @@ TraceFile parse_trace(std::string_view text) {
             rest.remove_prefix(comma + 1);
         }
         if (fields.size() != cols.size())
-            throw TraceFileError(no, std::to_string(fields.size()) + " fields where the column row has " +
-                                         std::to_string(cols.size()));
+            throw TraceFileError(
+                no, std::to_string(fields.size()) + " fields where the column row has " + std::to_string(cols.size()));
         const auto t = parse_number(fields[static_cast<std::size_t>(c_time)]);
-        if (!t) throw TraceFileError(no, "time_s \"" + std::string(fields[static_cast<std::size_t>(c_time)]) + "\" is not a number");
+        if (!t)
+            throw TraceFileError(
+                no, "time_s \"" + std::string(fields[static_cast<std::size_t>(c_time)]) + "\" is not a number");
         const auto m = parse_number(fields[static_cast<std::size_t>(c_len)]);
-        if (!m) throw TraceFileError(no, "measured_mm \"" + std::string(fields[static_cast<std::size_t>(c_len)]) + "\" is not a number");
+        if (!m)
+            throw TraceFileError(
+                no, "measured_mm \"" + std::string(fields[static_cast<std::size_t>(c_len)]) + "\" is not a number");
         if (*m <= 0.0) throw TraceFileError(no, "measured_mm must be > 0");
         if (!out.samples.empty() && !(*t > out.samples.back().time_s))
             throw TraceFileError(no, "time_s " + shortest(*t) + " is not after the previous row's (" +
@@ -334,8 +346,8 @@ std::int64_t import_trace(Store& store, const TraceFile& trace, const std::strin
     for (std::size_t i = 0; i < trace.samples.size(); ++i) {
         const double nm = std::round((trace.samples[i].measured_mm - reference_mm) * 1e6);
         if (std::abs(nm) > 2.0e9)
-            throw StorageError(StorageError::Kind::invalid, "sample " + std::to_string(i + 1) +
-                                                                 " is more than 2 mm from the reference length");
+            throw StorageError(StorageError::Kind::invalid,
+                               "sample " + std::to_string(i + 1) + " is more than 2 mm from the reference length");
         const double us = std::round(trace.samples[i].time_s * 1e6);
         double temp_C = 20.0;
         if (i < trace.bar_temp_C.size() && trace.bar_temp_C[i].has_value()) temp_C = *trace.bar_temp_C[i];
@@ -358,7 +370,8 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
         throw std::runtime_error("session " + std::to_string(session_id) + " is not a circular test (procedure \"" +
                                  info.procedure + "\")");
     const json meta = json::parse(info.metadata_json.empty() ? "{}" : info.metadata_json);
-    if (!meta.contains("test")) throw std::runtime_error("session " + std::to_string(session_id) + " has no test header");
+    if (!meta.contains("test"))
+        throw std::runtime_error("session " + std::to_string(session_id) + " has no test header");
     TraceFile t;
     t.test = test_from_json(meta["test"]);
     const double reference_mm = meta.value("reference_length_mm", t.test.radius_mm);
@@ -379,7 +392,8 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
         if (bar) t.bar_temp_C.push_back(static_cast<double>(st.column_int(2)) / 1000.0);
     }
     if (meta.contains("air_temp_C"))
-        for (const auto& a : meta["air_temp_C"]) t.air_temp_C.push_back(a.is_null() ? std::nullopt : std::optional<double>(a.get<double>()));
+        for (const auto& a : meta["air_temp_C"])
+            t.air_temp_C.push_back(a.is_null() ? std::nullopt : std::optional<double>(a.get<double>()));
     return t;
 }
 

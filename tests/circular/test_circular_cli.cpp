@@ -88,7 +88,8 @@ TEST(CircularCli, PlanWritesBothDialectsAndChecksTravel) {
     EXPECT_NE(fanuc.out.find("G3 X"), std::string::npos);
     EXPECT_NE(fanuc.out.find("G2 X"), std::string::npos);
     EXPECT_NE(fanuc.out.find("G4 P1000"), std::string::npos);
-    const auto lcnc = run(dir, "circle plan --plane YZ --arc 180 --dialect linuxcnc --test-out '" + dir.file("t.json") + "'");
+    const auto lcnc =
+        run(dir, "circle plan --plane YZ --arc 180 --dialect linuxcnc --test-out '" + dir.file("t.json") + "'");
     ASSERT_EQ(lcnc.code, 0) << lcnc.err;
     EXPECT_NE(lcnc.out.find("G19"), std::string::npos);
     EXPECT_NE(lcnc.out.find("G4 P1\n"), std::string::npos);

@@ -39,7 +39,7 @@ struct TraceFile {
     analysis::circular::TestSpec test;
     std::vector<analysis::circular::TraceSample> samples;
     std::vector<std::optional<double>> bar_temp_C, air_temp_C;  ///< per sample, when the column exists
-    std::string instrument_json, machine_json;                   ///< header values as written ("" = none)
+    std::string instrument_json, machine_json;                  ///< header values as written ("" = none)
     std::string operator_name, started_at, notes;
     std::vector<std::pair<std::string, std::string>> extra;  ///< unknown header keys (value as JSON text)
     std::vector<std::string> warnings;                       ///< unknown columns (one warning)
