@@ -41,6 +41,7 @@ struct PlanOptions {
     std::string out = "-";
     std::string test_out;
     double dwell_s = 1.0;
+    bool store = false;
 };
 
 circ::TestSpec plan_test(const PlanOptions& o) {
@@ -161,7 +162,7 @@ void write_out(const std::string& path, const std::string& text) {
     if (std::rename(tmp.c_str(), path.c_str()) != 0) throw CliError(kExitFailure, "cannot write " + path);
 }
 
-int run_plan(const PlanOptions& o) {
+int run_plan(const PlanOptions& o, const Globals& globals) {
     const circ::TestSpec t = plan_test(o);
     std::optional<acquisition::MachineFile> machine;
     if (!o.machine_file.empty()) {
@@ -182,6 +183,26 @@ int run_plan(const PlanOptions& o) {
     const std::string header = storage::test_json(t);
     if (!o.test_out.empty()) write_out(o.test_out, header + "\n");
     std::cerr << "ballbar: test header: " << header << '\n';
+    if (o.store) {
+        // A planned circular session: the test header it implies, waiting for its samples.
+        try {
+            storage::Store store(resolve_db_path(globals));
+            storage::NewSession ns;
+            ns.machine.name = "circular test";
+            ns.procedure = "circular";
+            ns.notes = "planned by circle plan";
+            const nlohmann::ordered_json meta = {{"format", "ballbar-trace/1"},
+                                                 {"test", nlohmann::ordered_json::parse(header)},
+                                                 {"reference_length_mm", t.radius_mm + 0.5 * t.feed_in_mm},
+                                                 {"has_bar_temp", false},
+                                                 {"planned", true}};
+            ns.metadata_json = meta.dump();
+            const auto id = store.create_session(ns);
+            std::cerr << "ballbar: planned session " << id << " (" << store.session(id).uuid << ")\n";
+        } catch (const storage::StorageError& e) {
+            throw cli_error(e);
+        }
+    }
     return kExitOk;
 }
 
@@ -316,7 +337,8 @@ BALLBAR_COMMAND(circle) {
         ->capture_default_str();
     plan->add_option("--out", po->out, "program file (- for stdout)")->capture_default_str();
     plan->add_option("--test-out", po->test_out, "write the test header (JSON) to this file too");
-    plan->callback([po, &globals] { globals.action = [po] { return run_plan(*po); }; });
+    plan->add_flag("--store", po->store, "create a planned circular session holding the test header");
+    plan->callback([po, &globals] { globals.action = [po, &globals] { return run_plan(*po, globals); }; });
 
     auto ao = std::make_shared<AnalyzeOptions>();
     auto* an = circle->add_subcommand("analyze", "G, G(b), F and the diagnostics of a circular test");

@@ -93,6 +93,11 @@ TEST(CircularCli, PlanWritesBothDialectsAndChecksTravel) {
     ASSERT_EQ(lcnc.code, 0) << lcnc.err;
     EXPECT_NE(lcnc.out.find("G19"), std::string::npos);
     EXPECT_NE(lcnc.out.find("G4 P1\n"), std::string::npos);
+    const auto stored = run(dir, "circle plan --plane XY --store --out '" + dir.file("p.nc") + "'");
+    ASSERT_EQ(stored.code, 0) << stored.err;
+    EXPECT_NE(stored.err.find("planned session 1"), std::string::npos) << stored.err;
+    const auto show = run(dir, "sessions show 1 --json");
+    EXPECT_NE(show.out.find("radius_mm"), std::string::npos) << show.out;
     const auto header = nlohmann::json::parse(ballbar::test::slurp(dir.file("t.json")));
     EXPECT_EQ(header["runs"][1]["start_deg"].get<double>(), 200.0);
     const std::string machine = std::string(BALLBAR_TEST_DATA_DIR) + "/machines/tttrr.json";  // X ±400 mm
