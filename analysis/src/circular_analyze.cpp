@@ -117,7 +117,21 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
     result.sample_rate_hz = in.sample_rate_hz;
     result.samples_used = in.points.size();
 
-    detail::FitOutput fit = detail::fit_diagnostics(in, options);
+    // The diagnosis leaves out the few samples within a guard time of each axis reversal: a step whose
+    // modelled time is off by a millisecond would otherwise pass for a reversal spike. (G uses all.)
+    detail::FitInput fit_in = in;
+    {
+        const double guard_s = 0.003 + 1.0 / in.sample_rate_hz;
+        fit_in.points.clear();
+        for (const auto& p : in.points) {
+            const double lag = in.run_lag_s[static_cast<std::size_t>(p.run)];
+            const double actual = p.theta - p.dir * std::atan(omega * lag);
+            const double k = std::round(actual / (0.5 * kPi));
+            if (std::abs(actual - k * 0.5 * kPi) / omega < guard_s) continue;
+            fit_in.points.push_back(p);
+        }
+    }
+    detail::FitOutput fit = detail::fit_diagnostics(fit_in, options);
     const double lag_phase = std::atan(omega * fit.lag_mean_s);
     std::vector<const detail::FitPoint*> all;
     for (std::size_t k = 0; k < result.runs.size(); ++k) {
