@@ -9,6 +9,7 @@
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
+#include "ballbar/storage/trace_file.hpp"
 #include "command.hpp"
 #include "storage_errors.hpp"
 
@@ -47,6 +48,14 @@ int run_export(const ExportOptions& o, const Globals& globals) {
             const auto set = storage::load_readings(store, id);
             if (set.readings.empty()) throw CliError(kExitFailure, "session " + std::to_string(id) + " has no points");
             write_text(o.out, storage::format_readings(set, storage::readings_metadata(info)));
+        } else if (o.format == "trace") {
+            try {
+                write_text(o.out, storage::format_trace(storage::load_trace(store, id)));
+            } catch (const storage::StorageError&) {
+                throw;
+            } catch (const std::runtime_error& e) {
+                throw CliError(kExitFailure, e.what());
+            }
         } else if (o.format == "json") {
             write_text(o.out, storage::session_json(store, id) + "\n");
         } else {
@@ -68,8 +77,8 @@ BALLBAR_COMMAND(export) {
     auto opts = std::make_shared<ballbar::app::ExportOptions>();
     auto* sub = root.add_subcommand("export", "Export a session as a readings file, JSON or CSV");
     sub->add_option("SESSION", opts->session, "session id or uuid prefix")->required();
-    sub->add_option("--format", opts->format, "readings | json | csv")
-        ->check(CLI::IsMember({"readings", "json", "csv"}))
+    sub->add_option("--format", opts->format, "readings | json | csv | trace (a circular test)")
+        ->check(CLI::IsMember({"readings", "json", "csv", "trace"}))
         ->capture_default_str();
     sub->add_option("--out", opts->out, "output file (readings, json; - for stdout) or directory (csv)")->required();
     sub->callback(

@@ -7,6 +7,7 @@
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/store.hpp"
+#include "ballbar/storage/trace_file.hpp"
 #include "command.hpp"
 
 namespace ballbar::app {
@@ -33,7 +34,10 @@ std::string mismatch_summary(const storage::ReadingsFile& f) {
            "): the producer's geometry or conventions may disagree with this file's machine header";
 }
 
+int run_import_trace(const ImportOptions& o, const Globals& globals);
+
 int run_import(const ImportOptions& o, const Globals& globals) {
+    if (storage::looks_like_trace(read_file(o.file, "file").substr(0, 64))) return run_import_trace(o, globals);
     storage::ReadingsFile file;
     try {
         file = storage::read_readings_file(o.file);
@@ -65,12 +69,42 @@ int run_import(const ImportOptions& o, const Globals& globals) {
     }
 }
 
+/// A ballbar-trace/1 file: a circular session (procedure "circular") with every sample.
+int run_import_trace(const ImportOptions& o, const Globals& globals) {
+    storage::TraceFile trace;
+    try {
+        trace = storage::read_trace_file(o.file);
+    } catch (const storage::TraceFileError& e) {
+        throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
+    }
+    for (const auto& w : trace.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
+    try {
+        storage::Store store(resolve_db_path(globals));
+        const auto id = storage::import_trace(store, trace, o.file);
+        const auto info = store.session(id);
+        if (o.json) {
+            nlohmann::json j = {{"session", id},
+                                {"uuid", info.uuid},
+                                {"samples", trace.samples.size()},
+                                {"format", "ballbar-trace/1"},
+                                {"warnings", trace.warnings}};
+            std::cout << j.dump(2) << '\n';
+        } else {
+            std::cout << "imported " << trace.samples.size() << " samples of a circular test from " << o.file
+                      << " into session " << id << " (" << info.uuid << ")\n";
+        }
+        return kExitOk;
+    } catch (const storage::StorageError& e) {
+        throw CliError(kExitFailure, std::string(e.what()) + " (nothing imported)");
+    }
+}
+
 }  // namespace
 }  // namespace ballbar::app
 
 BALLBAR_COMMAND(import) {
     auto opts = std::make_shared<ballbar::app::ImportOptions>();
-    auto* sub = root.add_subcommand("import", "Import a ballbar-readings/1 file into a new session");
+    auto* sub = root.add_subcommand("import", "Import a ballbar-readings/1 or ballbar-trace/1 file into a new session");
     sub->add_option("FILE", opts->file, "readings file (shared/formats/readings.md)")->required();
     sub->add_flag("--json", opts->json, "print the new session as JSON");
     sub->callback(

@@ -1,0 +1,651 @@
+// SPDX-License-Identifier: MIT
+// The diagnosis of a circular test: a least-squares fit of every effect's radial signature to the
+// measured − programmed radius over the data arcs (docs/circular.md, "Method").
+//
+// Linear in the effects' sizes, except for the servo lag (an exact first-order model, linearised about
+// the current estimate), the cyclic errors' pitches and the vibration's frequency (found by a search on
+// the residual, then refined with the others by Gauss–Newton). Standard uncertainties are the
+// covariance of the last linear solve scaled by the residual variance. Before fitting, the signatures
+// are taken in priority order and any that is (nearly) a combination of those before it is reported
+// unseparable instead of guessed.
+#include "circular_fit.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <cstdlib>
+#include <numeric>
+#include <unsupported/Eigen/FFT>
+
+namespace ballbar::analysis::circular::detail {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kSpikeDecay_s = 0.015;
+
+enum Col : int {
+    kConst,
+    kCos,
+    kSin,
+    kBlP,
+    kBlQ,
+    kSpP,
+    kSpQ,
+    kScale,
+    kSquare,
+    kServo,
+    kStrP,
+    kStrQ,
+    kBaseCount,
+    kCycPs = kBaseCount,
+    kCycPc,
+    kCycQs,
+    kCycQc,
+    kVibS,
+    kVibC,
+    kDkP,
+    kDkQ,
+    kDf,
+};
+
+std::optional<Diag> col_diag(int col) {
+    switch (col) {
+        case kBlP:
+            return Diag::BacklashP;
+        case kBlQ:
+            return Diag::BacklashQ;
+        case kSpP:
+            return Diag::SpikeP;
+        case kSpQ:
+            return Diag::SpikeQ;
+        case kScale:
+            return Diag::ScaleMismatch;
+        case kSquare:
+            return Diag::Squareness;
+        case kServo:
+            return Diag::ServoMismatch;
+        case kStrP:
+            return Diag::StraightnessP;
+        case kStrQ:
+            return Diag::StraightnessQ;
+        default:
+            return std::nullopt;
+    }
+}
+
+struct State {
+    double tau_mean_s = 0.0;
+    double dtau_ms = 0.0;
+    double kp = 0.0, kq = 0.0, f_hz = 0.0;  // 0: not in the model
+    double ap_s = 0.0, ap_c = 0.0, aq_s = 0.0, aq_c = 0.0, av_s = 0.0, av_c = 0.0;
+};
+
+struct Design {
+    std::vector<int> ids;
+    Eigen::MatrixXd x;
+    Eigen::VectorXd y;
+    int col(int id) const {
+        const auto it = std::find(ids.begin(), ids.end(), id);
+        return it == ids.end() ? -1 : static_cast<int>(it - ids.begin());
+    }
+};
+
+struct Solution {
+    Eigen::VectorXd beta;
+    Eigen::MatrixXd cov;
+    Eigen::VectorXd residual;
+    double rms = 0.0;
+};
+
+double spike_value(double angle, int dir, double start, double omega) {
+    // angle: the axis's phase with reversals at multiples of π; the spike of the latest reversal,
+    // when it happened on the arc (after the arc's start angle `start`, in the same phase).
+    const double k = dir > 0 ? std::floor(angle / kPi) : std::ceil(angle / kPi);
+    const double since = dir > 0 ? angle - k * kPi : k * kPi - angle;
+    if (dir * (k * kPi - start) <= 1e-9) return 0.0;
+    const double dt = since / omega;
+    if (dt > 20.0 * kSpikeDecay_s) return 0.0;
+    const double sign = (static_cast<long long>(std::llround(k)) % 2 == 0) ? 1.0 : -1.0;
+    return sign * std::exp(-dt / kSpikeDecay_s);
+}
+
+class Model {
+  public:
+    Model(const FitInput& in) : in_(in), r_(in.test.radius_mm), w_(in.omega_rad_s) {
+        cos_.reserve(in.points.size()), sin_.reserve(in.points.size());
+        for (const auto& p : in.points) cos_.push_back(std::cos(p.theta)), sin_.push_back(std::sin(p.theta));
+        const auto axis = plane_axis_index(in.test.plane);
+        cp_ = in.test.centre_mm[static_cast<std::size_t>(axis[0])];
+        cq_ = in.test.centre_mm[static_cast<std::size_t>(axis[1])];
+        double lo = in.points.front().t, hi = lo;
+        for (const auto& p : in.points) lo = std::min(lo, p.t), hi = std::max(hi, p.t);
+        t_mid_ = 0.5 * (lo + hi);
+    }
+
+    /// The axes' steady-state response to the circle through first-order lags: amplitude and phase.
+    struct Lag {
+        double ap, aq, cp, sp, cq, sq;
+    };
+    Lag lag_of(double tau_p, double tau_q) const {
+        const double php = std::atan(w_ * tau_p), phq = std::atan(w_ * tau_q);
+        return {1.0 / std::hypot(1.0, w_ * tau_p),
+                1.0 / std::hypot(1.0, w_ * tau_q),
+                std::cos(php),
+                std::sin(php),
+                std::cos(phq),
+                std::sin(phq)};
+    }
+    /// Radial deviation (µm) the lags cause at a point, cos θ and sin θ given.
+    double lag_um(double c0, double s0, int dir, const Lag& l) const {
+        const double c = l.ap * (c0 * l.cp + dir * s0 * l.sp);
+        const double s = l.aq * (s0 * l.cq - dir * c0 * l.sq);
+        return 1e3 * r_ * (std::sqrt(c * c + s * s) - 1.0);
+    }
+
+    void build(const State& st, const std::vector<int>& ids, Design& d) const {
+        const auto n = static_cast<Eigen::Index>(in_.points.size());
+        d.ids = ids;
+        d.x.resize(n, static_cast<Eigen::Index>(ids.size()));
+        d.y.resize(n);
+        const bool servo = std::find(ids.begin(), ids.end(), kServo) != ids.end();
+        const double tp = std::max(st.tau_mean_s + 0.5e-3 * st.dtau_ms, 0.0);
+        const double tq = std::max(st.tau_mean_s - 0.5e-3 * st.dtau_ms, 0.0);
+        const Lag lag0 = lag_of(tp, tq);
+        constexpr double h_ms = 0.01;
+        const double up = 0.5e-3 * h_ms;
+        const Lag lag_hi = lag_of(tp + up, tq - up), lag_lo = lag_of(tp - up, tq + up);
+        const double phm = std::atan(w_ * st.tau_mean_s);
+        const double cm = std::cos(phm), sm = std::sin(phm);
+        const double php = std::atan(w_ * tp), phq = std::atan(w_ * tq);
+        for (Eigen::Index i = 0; i < n; ++i) {
+            const FitPoint& pt = in_.points[static_cast<std::size_t>(i)];
+            const double c0 = cos_[static_cast<std::size_t>(i)], s0 = sin_[static_cast<std::size_t>(i)];
+            const int dir = pt.dir;
+            // cos and sin of θ − dir·φ for the mean lag and for each axis's own.
+            const double ca = c0 * cm + dir * s0 * sm, sa = s0 * cm - dir * c0 * sm;
+            const double cpx = c0 * lag0.cp + dir * s0 * lag0.sp, spx = s0 * lag0.cp - dir * c0 * lag0.sp;
+            const double cqx = c0 * lag0.cq + dir * s0 * lag0.sq, sqx = s0 * lag0.cq - dir * c0 * lag0.sq;
+            const double thp = pt.theta - dir * php, thq = pt.theta - dir * phq;
+            const double lag = lag_um(c0, s0, dir, lag0);
+            double servo_col = 0.0;
+            if (servo) servo_col = (lag_um(c0, s0, dir, lag_hi) - lag_um(c0, s0, dir, lag_lo)) / (2.0 * h_ms);
+            d.y[i] = pt.y_um - (lag - servo_col * st.dtau_ms);
+            // Cyclic phases about the centre: the same family as about the origin, better conditioned in k.
+            const double xp = r_ * cpx, xq = r_ * sqx;
+            const double tc = pt.t - t_mid_;
+            const double start = pt.theta - pt.dir * pt.travelled;
+            for (std::size_t c = 0; c < ids.size(); ++c) {
+                double v = 0.0;
+                switch (ids[c]) {
+                    case kConst:
+                        v = 1.0;
+                        break;
+                    case kCos:
+                        v = ca;
+                        break;
+                    case kSin:
+                        v = sa;
+                        break;
+                    case kBlP:
+                        v = 0.5 * pt.dir * (spx >= 0.0 ? 1.0 : -1.0) * ca;
+                        break;
+                    case kBlQ:
+                        v = -0.5 * pt.dir * (cqx >= 0.0 ? 1.0 : -1.0) * sa;
+                        break;
+                    case kSpP:
+                        v = spike_value(thp, pt.dir, start, w_) * ca;
+                        break;
+                    case kSpQ:
+                        v = spike_value(thq - 0.5 * kPi, pt.dir, start - 0.5 * kPi, w_) * sa;
+                        break;
+                    case kScale:
+                        v = r_ * 1e-3 * 0.5 * (ca * ca - sa * sa);
+                        break;
+                    case kSquare:
+                        v = 1e-3 * (cq_ + r_ * sa) * ca;
+                        break;
+                    case kServo:
+                        v = servo_col;
+                        break;
+                    case kStrP:
+                        v = ca * ca * sa;
+                        break;
+                    case kStrQ:
+                        v = sa * sa * ca;
+                        break;
+                    case kCycPs:
+                        v = std::sin(2.0 * kPi * st.kp * xp) * ca;
+                        break;
+                    case kCycPc:
+                        v = std::cos(2.0 * kPi * st.kp * xp) * ca;
+                        break;
+                    case kCycQs:
+                        v = std::sin(2.0 * kPi * st.kq * xq) * sa;
+                        break;
+                    case kCycQc:
+                        v = std::cos(2.0 * kPi * st.kq * xq) * sa;
+                        break;
+                    case kVibS:
+                        v = std::sin(2.0 * kPi * st.f_hz * tc);
+                        break;
+                    case kVibC:
+                        v = std::cos(2.0 * kPi * st.f_hz * tc);
+                        break;
+                    case kDkP: {
+                        const double a = 2.0 * kPi * st.kp * xp;
+                        v = 2.0 * kPi * xp * (st.ap_s * std::cos(a) - st.ap_c * std::sin(a)) * ca;
+                        break;
+                    }
+                    case kDkQ: {
+                        const double a = 2.0 * kPi * st.kq * xq;
+                        v = 2.0 * kPi * xq * (st.aq_s * std::cos(a) - st.aq_c * std::sin(a)) * sa;
+                        break;
+                    }
+                    case kDf: {
+                        const double a = 2.0 * kPi * st.f_hz * tc;
+                        v = 2.0 * kPi * tc * (st.av_s * std::cos(a) - st.av_c * std::sin(a));
+                        break;
+                    }
+                    default:
+                        break;
+                }
+                d.x(i, static_cast<Eigen::Index>(c)) = v;
+            }
+        }
+    }
+
+    double axis_position(const FitPoint& pt, const State& st, int axis) const {
+        const double tau = std::max(st.tau_mean_s + (axis == 0 ? 0.5e-3 : -0.5e-3) * st.dtau_ms, 0.0);
+        const double th = pt.theta - pt.dir * std::atan(w_ * tau);
+        return axis == 0 ? r_ * std::cos(th) : r_ * std::sin(th);
+    }
+    double radial_factor(const FitPoint& pt, const State& st, int axis) const {
+        const double th = pt.theta - pt.dir * std::atan(w_ * st.tau_mean_s);
+        return axis == 0 ? std::cos(th) : std::sin(th);
+    }
+    double radius() const { return r_; }
+    double t_mid() const { return t_mid_; }
+
+  private:
+    const FitInput& in_;
+    double r_, w_, cp_ = 0.0, cq_ = 0.0, t_mid_ = 0.0;
+    std::vector<double> cos_, sin_;
+};
+
+Solution solve(const Design& d) {
+    Solution s;
+    const Eigen::Index m = d.x.cols(), n = d.x.rows();
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m, m);
+    a.selfadjointView<Eigen::Lower>().rankUpdate(d.x.transpose());
+    a = a.selfadjointView<Eigen::Lower>();
+    Eigen::VectorXd scale = a.diagonal().cwiseSqrt().cwiseMax(1e-300).cwiseInverse();
+    const Eigen::MatrixXd as = scale.asDiagonal() * a * scale.asDiagonal();
+    const Eigen::VectorXd b = scale.asDiagonal() * (d.x.transpose() * d.y);
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(as);
+    s.beta = scale.asDiagonal() * ldlt.solve(b);
+    s.residual = d.y - d.x * s.beta;
+    const double rss = s.residual.squaredNorm();
+    s.rms = std::sqrt(rss / static_cast<double>(std::max<Eigen::Index>(n, 1)));
+    const double var = rss / static_cast<double>(std::max<Eigen::Index>(n - m, 1));
+    s.cov = var * (scale.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(m, m)) * scale.asDiagonal());
+    return s;
+}
+
+std::string col_name(int id, Plane plane) {
+    if (id == kConst) return "mean radius";
+    if (id == kCos || id == kSin) return "centre";
+    const auto diag = col_diag(id);
+    return diag ? diagnostic_key(*diag, plane) : "?";
+}
+
+struct Separability {
+    std::vector<int> accepted;
+    std::vector<UnseparableGroup> groups;
+    std::vector<int> confounded;  // accepted columns whose value stands for a group's combination
+};
+
+/// Takes the base signatures in priority order; one nearly a combination of the accepted ones is
+/// unseparable, grouped with those it combines.
+Separability check_separability(const Design& d, const FitInput& in, const AnalysisOptions& opt) {
+    Separability out;
+    const Eigen::Index m = d.x.cols();
+    Eigen::MatrixXd g = d.x.transpose() * d.x;
+    const Eigen::VectorXd nrm = g.diagonal().cwiseSqrt().cwiseMax(1e-300);
+    for (Eigen::Index i = 0; i < m; ++i)
+        for (Eigen::Index j = 0; j < m; ++j) g(i, j) /= nrm[i] * nrm[j];
+    std::vector<Eigen::Index> acc;
+    for (Eigen::Index j = 0; j < m; ++j) {
+        const int id = d.ids[static_cast<std::size_t>(j)];
+        if (nrm[j] < 1e-9 * std::sqrt(static_cast<double>(d.x.rows()))) {
+            UnseparableGroup none;
+            none.keys = {col_name(id, in.test.plane)};
+            none.reason = "no signature in this data";
+            out.groups.push_back(none);
+            continue;
+        }
+        if (acc.empty()) {
+            acc.push_back(j);
+            continue;
+        }
+        const auto k = static_cast<Eigen::Index>(acc.size());
+        Eigen::MatrixXd gss(k, k);
+        Eigen::VectorXd gjs(k);
+        for (Eigen::Index a = 0; a < k; ++a) {
+            gjs[a] = g(acc[static_cast<std::size_t>(a)], j);
+            for (Eigen::Index b = 0; b < k; ++b)
+                gss(a, b) = g(acc[static_cast<std::size_t>(a)], acc[static_cast<std::size_t>(b)]);
+        }
+        const Eigen::VectorXd c = gss.ldlt().solve(gjs);
+        const double independence = std::sqrt(std::max(1.0 - gjs.dot(c), 0.0));
+        if (independence >= opt.min_independence) {
+            acc.push_back(j);
+            continue;
+        }
+        UnseparableGroup grp;
+        grp.keys.push_back(col_name(id, in.test.plane));
+        const double cmax = c.cwiseAbs().maxCoeff();
+        for (Eigen::Index a = 0; a < k; ++a) {
+            if (std::abs(c[a]) < 0.1 * cmax) continue;
+            const int aid = d.ids[static_cast<std::size_t>(acc[static_cast<std::size_t>(a)])];
+            const std::string name = col_name(aid, in.test.plane);
+            if (std::find(grp.keys.begin(), grp.keys.end(), name) == grp.keys.end()) grp.keys.push_back(name);
+            if (col_diag(aid)) {
+                out.confounded.push_back(aid);
+                grp.combined_key = name;
+            }
+        }
+        grp.reason = in.both_directions ? "their radial signatures coincide over this data arc"
+                                        : "one direction only: their radial signatures coincide";
+        out.groups.push_back(grp);
+    }
+    for (auto j : acc) out.accepted.push_back(d.ids[static_cast<std::size_t>(j)]);
+    return out;
+}
+
+struct Peak {
+    double k = 0.0;
+    double amp = 0.0;
+    double strength = 0.0;  ///< RMS of its radial signature, to compare candidates
+    bool found = false;
+};
+
+/// Searches the residual for a cyclic error of one axis: 2×2 fits over a grid of spatial
+/// frequencies (a rotating phasor per point makes each step a multiplication), then golden section.
+Peak search_cyclic(const FitInput& in, const Model& model, const State& st, const Eigen::VectorXd& resid, int axis,
+                   const AnalysisOptions& opt) {
+    Peak peak;
+    const double r = model.radius();
+    const double kmin = 4.0 / r, kmax = 1.0 / opt.min_pitch_mm;
+    if (kmin >= kmax) return peak;
+    const std::size_t n = in.points.size();
+    // Axis travel along the data (|dp| ≤ R dθ): the search samples each cycle at least 6 times.
+    double path = 0.0;
+    for (std::size_t i = 1; i < n; ++i)
+        if (in.points[i].run == in.points[i - 1].run) path += r * std::abs(in.points[i].theta - in.points[i - 1].theta);
+    const double wanted = std::max(2000.0, 6.0 * kmax * path);
+    const std::size_t stride = std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(n) / wanted));
+    std::vector<double> x, w, y;
+    for (std::size_t i = 0; i < n; i += stride) {
+        x.push_back(model.axis_position(in.points[i], st, axis));
+        w.push_back(model.radial_factor(in.points[i], st, axis));
+        y.push_back(resid[static_cast<Eigen::Index>(i)]);
+    }
+    const std::size_t m = x.size();
+    auto reduction_at = [&](double k, double* as, double* ac) {
+        double sss = 0, ssc = 0, scc = 0, sys = 0, syc = 0;
+        for (std::size_t i = 0; i < m; ++i) {
+            const double a = 2.0 * kPi * k * x[i];
+            const double s = std::sin(a) * w[i], c = std::cos(a) * w[i];
+            sss += s * s, ssc += s * c, scc += c * c, sys += y[i] * s, syc += y[i] * c;
+        }
+        const double det = sss * scc - ssc * ssc;
+        if (det <= 0.0) return 0.0;
+        const double bs = (scc * sys - ssc * syc) / det, bc = (sss * syc - ssc * sys) / det;
+        if (as) *as = bs, *ac = bc;
+        return bs * sys + bc * syc;
+    };
+    const double dk = 1.0 / (8.0 * r);
+    std::vector<std::complex<double>> z(m), step(m);
+    for (std::size_t i = 0; i < m; ++i) {
+        z[i] = std::polar(1.0, 2.0 * kPi * kmin * x[i]);
+        step[i] = std::polar(1.0, 2.0 * kPi * dk * x[i]);
+    }
+    double best = -1.0, best_k = kmin;
+    for (double k = kmin; k <= kmax; k += dk) {
+        double sss = 0, ssc = 0, scc = 0, sys = 0, syc = 0;
+        for (std::size_t i = 0; i < m; ++i) {
+            const double s = z[i].imag() * w[i], c = z[i].real() * w[i];
+            sss += s * s, ssc += s * c, scc += c * c, sys += y[i] * s, syc += y[i] * c;
+            z[i] *= step[i];
+        }
+        const double det = sss * scc - ssc * ssc;
+        if (det <= 0.0) continue;
+        const double red = ((scc * sys - ssc * syc) * sys + (sss * syc - ssc * sys) * syc) / det;
+        if (red > best) best = red, best_k = k;
+    }
+    double lo = std::max(kmin, best_k - dk), hi = std::min(kmax, best_k + dk);
+    const double gr = (std::sqrt(5.0) - 1.0) / 2.0;
+    double a = hi - gr * (hi - lo), b = lo + gr * (hi - lo);
+    double fa = reduction_at(a, nullptr, nullptr), fb = reduction_at(b, nullptr, nullptr);
+    for (int it = 0; it < 16; ++it) {
+        if (fa > fb) {
+            hi = b, b = a, fb = fa, a = hi - gr * (hi - lo), fa = reduction_at(a, nullptr, nullptr);
+        } else {
+            lo = a, a = b, fa = fb, b = lo + gr * (hi - lo), fb = reduction_at(b, nullptr, nullptr);
+        }
+    }
+    peak.k = 0.5 * (lo + hi);
+    double as = 0.0, ac = 0.0;
+    const double red = reduction_at(peak.k, &as, &ac);
+    peak.amp = std::hypot(as, ac);
+    double yy = 0.0, ww = 0.0;
+    for (std::size_t i = 0; i < m; ++i) yy += y[i] * y[i], ww += w[i] * w[i];
+    const double sigma = std::sqrt(std::max(yy - red, 0.0) / static_cast<double>(std::max<std::size_t>(m, 3) - 2));
+    const double amp_sigma = sigma * std::sqrt(2.0 / std::max(ww, 1e-300));
+    peak.found = peak.amp > 6.0 * amp_sigma && peak.amp > 0.1;
+    peak.strength = peak.amp * std::sqrt(ww / (2.0 * static_cast<double>(m)));
+    return peak;
+}
+
+/// Searches the residual for a vibration: the largest line of its spectrum on a uniform time grid.
+Peak search_vibration(const FitInput& in, const Eigen::VectorXd& resid, const AnalysisOptions& opt) {
+    Peak peak;
+    const double fs = in.sample_rate_hz;
+    if (!(fs > 0.0)) return peak;
+    const double dt = 1.0 / fs;
+    double t0 = in.points.front().t, t1 = t0;
+    for (const auto& p : in.points) t0 = std::min(t0, p.t), t1 = std::max(t1, p.t);
+    const auto cells = static_cast<std::size_t>(std::llround((t1 - t0) / dt)) + 1;
+    if (cells > (std::size_t{1} << 24)) return peak;  // 4.6 h at 1 kHz: beyond any circular test
+    std::size_t nfft = 1;
+    while (nfft < cells) nfft <<= 1;
+    std::vector<double> grid(nfft, 0.0);
+    for (std::size_t i = 0; i < in.points.size(); ++i) {
+        const auto cell = static_cast<std::size_t>(std::llround((in.points[i].t - t0) / dt));
+        if (cell < nfft) grid[cell] = resid[static_cast<Eigen::Index>(i)];
+    }
+    Eigen::FFT<double> fft;
+    fft.SetFlag(Eigen::FFT<double>::HalfSpectrum);
+    std::vector<std::complex<double>> spec;
+    fft.fwd(spec, grid);
+    const double df = fs / static_cast<double>(nfft);
+    const auto k0 = static_cast<std::size_t>(std::ceil(opt.min_vibration_hz / df));
+    const auto k1 = std::min(spec.size() - 2, static_cast<std::size_t>(0.45 * fs / df));
+    if (k0 + 4 >= k1) return peak;
+    std::vector<double> mag(k1 - k0 + 1);
+    std::size_t best = k0;
+    for (std::size_t k = k0; k <= k1; ++k) {
+        mag[k - k0] = std::abs(spec[k]);
+        if (mag[k - k0] > std::abs(spec[best])) best = k;
+    }
+    std::vector<double> sorted = mag;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    const double scale = 2.0 / static_cast<double>(in.points.size());
+    const double a = std::abs(spec[best - 1]), b = std::abs(spec[best]), c = std::abs(spec[best + 1]);
+    const double denom = a - 2.0 * b + c;
+    const double shift = denom != 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
+    peak.k = (static_cast<double>(best) + shift) * df;
+    peak.amp = b * scale;
+    peak.found = b > 10.0 * median && peak.amp > 0.1;
+    peak.strength = peak.amp / std::sqrt(2.0);
+    return peak;
+}
+
+double amplitude_std(const Solution& s, int i, int j) {
+    const double a = s.beta[i], b = s.beta[j];
+    const double c = std::hypot(a, b);
+    if (c <= 0.0) return std::sqrt(0.5 * (s.cov(i, i) + s.cov(j, j)));
+    const double var = (a * a * s.cov(i, i) + b * b * s.cov(j, j) + 2.0 * a * b * s.cov(i, j)) / (c * c);
+    return std::sqrt(std::max(var, 0.0));
+}
+
+}  // namespace
+
+FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
+    FitOutput out;
+    if (in.points.size() < 50) throw CircularError("too few samples in the data arcs to diagnose (need 50)");
+    const Model model(in);
+    State st;
+    // The mean lag of the axes from the runs' feed-ins (each feed-in moves along its start angle).
+    auto update_tau_mean = [&] {
+        double sum = 0.0;
+        for (std::size_t k = 0; k < in.run_lag_s.size(); ++k)
+            sum += in.run_lag_s[k] - 0.5e-3 * st.dtau_ms * std::cos(2.0 * in.run_start_rad[k]);
+        st.tau_mean_s = std::max(sum / static_cast<double>(std::max<std::size_t>(in.run_lag_s.size(), 1)), 0.0);
+    };
+    update_tau_mean();
+
+    std::vector<int> base;
+    for (int c = 0; c < kBaseCount; ++c) base.push_back(c);
+    // Separability judged without the lag: a reversal that only the lag moves into the data arc
+    // (a few samples) must not count as information.
+    Design d;
+    model.build(State{}, base, d);
+    const Separability sep = check_separability(d, in, opt);
+    out.unseparable = sep.groups;
+    std::vector<int> ids = sep.accepted;
+    const bool servo = std::find(ids.begin(), ids.end(), kServo) != ids.end();
+
+    Solution sol;
+    auto run_fit = [&](const std::vector<int>& cols) {
+        model.build(st, cols, d);
+        sol = solve(d);
+        const int sv = d.col(kServo);
+        if (sv >= 0) st.dtau_ms = sol.beta[sv];
+        update_tau_mean();
+    };
+    run_fit(ids);
+
+    // Cyclic errors and vibration, the strongest first, each searched on what the others left.
+    bool want_p = true, want_q = true, want_v = true;
+    while (want_p || want_q || want_v) {
+        Peak best;
+        int which = -1;
+        const Peak cands[3] = {want_p ? search_cyclic(in, model, st, sol.residual, 0, opt) : Peak{},
+                               want_q ? search_cyclic(in, model, st, sol.residual, 1, opt) : Peak{},
+                               want_v ? search_vibration(in, sol.residual, opt) : Peak{}};
+        for (int c = 0; c < 3; ++c)
+            if (cands[c].found && cands[c].strength > best.strength) best = cands[c], which = c;
+        if (which < 0) break;
+        if (which == 0) st.kp = best.k, want_p = false, ids.insert(ids.end(), {kCycPs, kCycPc});
+        if (which == 1) st.kq = best.k, want_q = false, ids.insert(ids.end(), {kCycQs, kCycQc});
+        if (which == 2) st.f_hz = best.k, want_v = false, ids.insert(ids.end(), {kVibS, kVibC});
+        run_fit(ids);
+    }
+    // Gauss–Newton on pitches and frequency (and the lag) together with everything linear.
+    std::vector<int> gn = ids;
+    if (st.kp > 0.0) gn.push_back(kDkP);
+    if (st.kq > 0.0) gn.push_back(kDkQ);
+    if (st.f_hz > 0.0) gn.push_back(kDf);
+    const double dk = 1.0 / (10.0 * model.radius());
+    const double fspan = 1.0 / std::max(2.0 * std::abs(in.points.back().t - model.t_mid()), 1e-3);
+    // The last solve is the result: derivative columns included, so pitch and frequency carry
+    // uncertainties (their step there is the last correction, not applied).
+    const int iterations = gn.size() > ids.size() ? 2 : servo ? 1 : 0;
+    for (int it = 0; it < iterations; ++it) {
+        auto take = [&](int s, int c, double& as, double& ac) {
+            if (d.col(s) >= 0) as = sol.beta[d.col(s)], ac = sol.beta[d.col(c)];
+        };
+        take(kCycPs, kCycPc, st.ap_s, st.ap_c);
+        take(kCycQs, kCycQc, st.aq_s, st.aq_c);
+        take(kVibS, kVibC, st.av_s, st.av_c);
+        run_fit(gn);
+        if (it + 1 == iterations) break;
+        if (d.col(kDkP) >= 0) st.kp += std::clamp(sol.beta[d.col(kDkP)], -dk, dk);
+        if (d.col(kDkQ) >= 0) st.kq += std::clamp(sol.beta[d.col(kDkQ)], -dk, dk);
+        if (d.col(kDf) >= 0) st.f_hz += std::clamp(sol.beta[d.col(kDf)], -fspan, fspan);
+    }
+
+    out.residual_rms_um = sol.rms;
+    out.mean_radius_um = sol.beta[d.col(kConst)];
+    out.mean_radius_std_um = std::sqrt(sol.cov(d.col(kConst), d.col(kConst)));
+    out.lag_mean_s = st.tau_mean_s;
+
+    auto contribution = [&](std::initializer_list<int> cols) {
+        double lo = 0.0, hi = 0.0;
+        for (Eigen::Index i = 0; i < d.x.rows(); ++i) {
+            double v = 0.0;
+            for (int c : cols)
+                if (d.col(c) >= 0) v += d.x(i, d.col(c)) * sol.beta[d.col(c)];
+            lo = i == 0 ? v : std::min(lo, v), hi = i == 0 ? v : std::max(hi, v);
+        }
+        return hi - lo;
+    };
+    auto is_confounded = [&](int id) {
+        return std::find(sep.confounded.begin(), sep.confounded.end(), id) != sep.confounded.end();
+    };
+    for (int id : sep.accepted) {
+        const auto diag = col_diag(id);
+        if (!diag) continue;
+        const int c = d.col(id);
+        if (is_confounded(id)) {
+            for (auto& g : out.unseparable)
+                if (g.combined_key == diagnostic_key(*diag, in.test.plane))
+                    g.combined_value = sol.beta[c], g.combined_std = std::sqrt(sol.cov(c, c));
+            continue;
+        }
+        DiagnosticResult r;
+        r.diag = *diag;
+        r.key = diagnostic_key(*diag, in.test.plane);
+        r.value = sol.beta[c];
+        r.std_uncertainty = std::sqrt(sol.cov(c, c));
+        r.contribution_um = contribution({id});
+        out.diagnostics.push_back(r);
+    }
+    auto periodic = [&](Diag amp, Diag period, int cs, int cc, int dcol, double k, bool frequency) {
+        DiagnosticResult r;
+        r.diag = amp;
+        r.key = diagnostic_key(amp, in.test.plane);
+        if (d.col(cs) < 0) {
+            r.detected = false;
+            r.std_uncertainty = 0.0;
+            out.diagnostics.push_back(r);
+            return;
+        }
+        r.value = std::hypot(sol.beta[d.col(cs)], sol.beta[d.col(cc)]);
+        r.std_uncertainty = amplitude_std(sol, d.col(cs), d.col(cc));
+        r.contribution_um = contribution({cs, cc});
+        out.diagnostics.push_back(r);
+        DiagnosticResult p;
+        p.diag = period;
+        p.key = diagnostic_key(period, in.test.plane);
+        const double sk = d.col(dcol) >= 0 ? std::sqrt(sol.cov(d.col(dcol), d.col(dcol))) : 0.0;
+        p.value = frequency ? k : 1.0 / k;
+        p.std_uncertainty = frequency ? sk : sk / (k * k);
+        out.diagnostics.push_back(p);
+    };
+    periodic(Diag::CyclicP, Diag::CyclicPitchP, kCycPs, kCycPc, kDkP, st.kp, false);
+    periodic(Diag::CyclicQ, Diag::CyclicPitchQ, kCycQs, kCycQc, kDkQ, st.kq, false);
+    periodic(Diag::Vibration, Diag::VibrationHz, kVibS, kVibC, kDf, st.f_hz, true);
+
+    double total = 0.0;
+    for (const auto& r : out.diagnostics) total += r.contribution_um;
+    if (total > 0.0)
+        for (auto& r : out.diagnostics) r.share_percent = 100.0 * r.contribution_um / total;
+    return out;
+}
+
+}  // namespace ballbar::analysis::circular::detail

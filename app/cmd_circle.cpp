@@ -1,0 +1,354 @@
+// SPDX-License-Identifier: MIT
+// `ballbar circle plan|analyze`: the ISO 230-4 circular test (docs/circular.md).
+//   plan     writes the part program of a circular test (Fanuc or LinuxCNC) and its test header
+//   analyze  G, G(b), F and the diagnostics of a ballbar-trace/1 file or a stored circular session;
+//            --controller prints the measured backlash (and scale) in a controller's own terms
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "ballbar/acquisition/machine_file.hpp"
+#include "ballbar/analysis/circular.hpp"
+#include "ballbar/analysis/nc_program.hpp"
+#include "ballbar/storage/store.hpp"
+#include "ballbar/storage/trace_file.hpp"
+#include "circle_output.hpp"
+#include "command.hpp"
+#include "storage_errors.hpp"
+
+namespace ballbar::app {
+namespace {
+
+namespace circ = analysis::circular;
+constexpr double kPi = 3.14159265358979323846;
+
+struct PlanOptions {
+    std::string plane = "XY";
+    double radius_mm = 100.0;
+    std::vector<double> centre_mm{0.0, 0.0, 0.0};
+    double feed_mm_min = 1000.0;
+    double feed_in_mm = 1.5;
+    double overshoot_deg = -1.0;  // <0: 45 for a full circle, 20 for a partial arc
+    double arc_deg = 360.0;
+    double start_deg = 1e9;  // default: 0 (full) or −overshoot (partial)
+    std::string directions = "both";
+    std::string dialect;
+    std::string machine_file;
+    std::string out = "-";
+    std::string test_out;
+    double dwell_s = 1.0;
+    bool store = false;
+};
+
+circ::TestSpec plan_test(const PlanOptions& o) {
+    circ::TestSpec t;
+    const auto plane = circ::parse_plane(o.plane);
+    if (!plane) throw CliError(kExitUsage, "--plane must be XY, YZ or ZX");
+    t.plane = *plane;
+    t.radius_mm = o.radius_mm;
+    if (o.centre_mm.size() != 3) throw CliError(kExitUsage, "--centre needs three numbers X Y Z");
+    t.centre_mm = {o.centre_mm[0], o.centre_mm[1], o.centre_mm[2]};
+    t.feed_mm_min = o.feed_mm_min;
+    t.feed_in_mm = o.feed_in_mm;
+    const bool full = o.arc_deg >= 360.0;
+    const double over = o.overshoot_deg >= 0.0 ? o.overshoot_deg : full ? 45.0 : 20.0;
+    const double start = o.start_deg < 1e8 ? o.start_deg : full ? 0.0 : -over;
+    const double end = start + 2.0 * over + o.arc_deg;
+    if (o.directions == "both" || o.directions == "ccw")
+        t.runs.push_back({circ::Direction::Ccw, start, over, o.arc_deg});
+    if (o.directions == "both") t.runs.push_back({circ::Direction::Cw, end, over, o.arc_deg});
+    if (o.directions == "cw") t.runs.push_back({circ::Direction::Cw, start, over, o.arc_deg});
+    if (const auto bad = t.validate(); !bad.empty()) throw CliError(kExitUsage, bad);
+    return t;
+}
+
+std::string num(double v) {
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(4) << v;
+    std::string s = os.str();
+    while (!s.empty() && s.back() == '0') s.pop_back();
+    if (!s.empty() && s.back() == '.') s.pop_back();
+    return s == "-0" ? "0" : s;
+}
+
+/// The part program of trace.md's "The motion", run by run, arcs split into ≤ 90° blocks.
+std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect, double dwell_s,
+                           const acquisition::MachineFile* machine) {
+    const auto ax = circ::plane_axis_index(t.plane);
+    const char* letters = "XYZ";
+    const char* centre_words = "IJK";
+    const char* gplane = t.plane == circ::Plane::XY ? "G17" : t.plane == circ::Plane::ZX ? "G18" : "G19";
+    const double cp = t.centre_mm[static_cast<std::size_t>(ax[0])], cq = t.centre_mm[static_cast<std::size_t>(ax[1])];
+    auto point = [&](double r, double deg) {
+        std::array<double, 3> p = t.centre_mm;
+        p[static_cast<std::size_t>(ax[0])] = cp + r * std::cos(deg * kPi / 180.0);
+        p[static_cast<std::size_t>(ax[1])] = cq + r * std::sin(deg * kPi / 180.0);
+        return p;
+    };
+    // Travel: every point of the path lies within radius R + feed-in of the centre.
+    if (machine) {
+        for (int i = 0; i < 3; ++i) {
+            const auto& range = machine->range(static_cast<acquisition::Axis>(i));
+            double lo = t.centre_mm[static_cast<std::size_t>(i)], hi = lo;
+            if (i == ax[0] || i == ax[1]) lo -= t.radius_mm + t.feed_in_mm, hi += t.radius_mm + t.feed_in_mm;
+            if (lo < range.min || hi > range.max)
+                throw CliError(kExitUsage, std::string("the test leaves the travel of ") + letters[i] + ": it needs " +
+                                               num(lo) + " .. " + num(hi) + " mm, the machine has " + num(range.min) +
+                                               " .. " + num(range.max) + " mm");
+        }
+    }
+    const bool fanuc = dialect == analysis::NcDialect::Fanuc;
+    std::string out;
+    analysis::write_nc_header(out, dialect, std::string("ballbar circular test ") + circ::plane_name(t.plane));
+    auto comment = [&](const std::string& text) { out += "(" + text + ")\n"; };
+    auto move = [&](const char* g, const std::array<double, 3>& p, bool with_feed) {
+        out += g;
+        for (int i = 0; i < 3; ++i) out += std::string(" ") + letters[i] + num(p[static_cast<std::size_t>(i)]);
+        if (with_feed) out += " F" + num(t.feed_mm_min);
+        out += '\n';
+    };
+    auto dwell = [&] {
+        out += fanuc ? "G4 P" + std::to_string(std::lround(dwell_s * 1000.0)) + "\n" : "G4 P" + num(dwell_s) + "\n";
+    };
+    out += gplane;
+    out += '\n';
+    comment("plane " + std::string(circ::plane_name(t.plane)) + ", radius " + num(t.radius_mm) + " mm, feed " +
+            num(t.feed_mm_min) + " mm/min, feed-in " + num(t.feed_in_mm) + " mm");
+    for (std::size_t k = 0; k < t.runs.size(); ++k) {
+        const circ::RunSpec& r = t.runs[k];
+        const double sg = r.direction == circ::Direction::Ccw ? 1.0 : -1.0;
+        comment("run " + std::to_string(k + 1) + ": " + circ::direction_name(r.direction) + " from " +
+                num(r.start_deg) + " deg, overshoot " + num(r.overshoot_deg) + " deg, data arc " + num(r.data_arc_deg) +
+                " deg");
+        if (k == 0) move("G0", point(t.radius_mm + t.feed_in_mm, r.start_deg), false);
+        dwell();
+        move("G1", point(t.radius_mm, r.start_deg), true);  // feed-in
+        const double sweep = 2.0 * r.overshoot_deg + r.data_arc_deg;
+        const int pieces = std::max(1, static_cast<int>(std::ceil(sweep / 90.0 - 1e-9)));
+        double a = r.start_deg;
+        for (int i = 0; i < pieces; ++i) {
+            const double b = r.start_deg + sg * sweep * (i + 1) / pieces;
+            const auto from = point(t.radius_mm, a), to = point(t.radius_mm, b);
+            out += sg > 0 ? "G3" : "G2";
+            for (int j : {ax[0], ax[1]}) out += std::string(" ") + letters[j] + num(to[static_cast<std::size_t>(j)]);
+            for (int j : {ax[0], ax[1]})
+                out += std::string(" ") + centre_words[j] +
+                       num(t.centre_mm[static_cast<std::size_t>(j)] - from[static_cast<std::size_t>(j)]);
+            out += " F" + num(t.feed_mm_min) + '\n';
+            a = b;
+        }
+        move("G1", point(t.radius_mm + t.feed_in_mm, a), true);  // feed-out
+    }
+    dwell();
+    analysis::write_nc_footer(out, dialect);
+    return out;
+}
+
+void write_out(const std::string& path, const std::string& text) {
+    if (path == "-") {
+        std::cout << text;
+        return;
+    }
+    const std::string tmp = path + ".tmp";
+    {
+        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+        f << text;
+        if (!f) throw CliError(kExitFailure, "cannot write " + path);
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) throw CliError(kExitFailure, "cannot write " + path);
+}
+
+int run_plan(const PlanOptions& o, const Globals& globals) {
+    const circ::TestSpec t = plan_test(o);
+    std::optional<acquisition::MachineFile> machine;
+    if (!o.machine_file.empty()) {
+        try {
+            machine = acquisition::parse_machine_file(read_file(o.machine_file, "machine file"));
+        } catch (const std::exception& e) {
+            if (dynamic_cast<const CliError*>(&e)) throw;
+            throw CliError(kExitUsage, o.machine_file + ": " + e.what());
+        }
+    }
+    analysis::NcDialect dialect = machine ? machine->dialect : analysis::NcDialect::Fanuc;
+    if (!o.dialect.empty()) {
+        const auto d = analysis::parse_nc_dialect(o.dialect);
+        if (!d) throw CliError(kExitUsage, "--dialect must be fanuc or linuxcnc");
+        dialect = *d;
+    }
+    write_out(o.out, circle_program(t, dialect, o.dwell_s, machine ? &*machine : nullptr));
+    const std::string header = storage::test_json(t);
+    if (!o.test_out.empty()) write_out(o.test_out, header + "\n");
+    std::cerr << "ballbar: test header: " << header << '\n';
+    if (o.store) {
+        // A planned circular session: the test header it implies, waiting for its samples.
+        try {
+            storage::Store store(resolve_db_path(globals));
+            storage::NewSession ns;
+            ns.machine.name = "circular test";
+            ns.procedure = "circular";
+            ns.notes = "planned by circle plan";
+            const nlohmann::ordered_json meta = {{"format", "ballbar-trace/1"},
+                                                 {"test", nlohmann::ordered_json::parse(header)},
+                                                 {"reference_length_mm", t.radius_mm + 0.5 * t.feed_in_mm},
+                                                 {"has_bar_temp", false},
+                                                 {"planned", true}};
+            ns.metadata_json = meta.dump();
+            const auto id = store.create_session(ns);
+            std::cerr << "ballbar: planned session " << id << " (" << store.session(id).uuid << ")\n";
+        } catch (const storage::StorageError& e) {
+            throw cli_error(e);
+        }
+    }
+    return kExitOk;
+}
+
+struct AnalyzeOptions {
+    std::vector<std::string> inputs;
+    bool json = false;
+    bool store = false;
+    std::optional<double> tolerance_um;
+    std::string controller;
+};
+
+struct Loaded {
+    storage::TraceFile trace;
+    std::optional<std::int64_t> session;
+    std::string name;
+};
+
+Loaded load_input(const std::string& input, const Globals& globals, bool store_file) {
+    Loaded l;
+    l.name = input;
+    if (std::filesystem::is_regular_file(input)) {
+        try {
+            l.trace = storage::read_trace_file(input);
+        } catch (const storage::TraceFileError& e) {
+            throw CliError(kExitUsage, input + ": " + e.what());
+        }
+        for (const auto& w : l.trace.warnings) std::cerr << "ballbar: warning: " << input << ": " << w << '\n';
+        if (store_file) {
+            storage::Store store(resolve_db_path(globals));
+            l.session = storage::import_trace(store, l.trace, input);
+        }
+        return l;
+    }
+    storage::StoreOptions so;
+    so.recover = false;
+    storage::Store store(resolve_db_path(globals), so);
+    const auto id = store.find_session(input);
+    try {
+        l.trace = storage::load_trace(store, id);
+    } catch (const storage::StorageError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw CliError(kExitUsage, e.what());
+    }
+    l.session = id;
+    return l;
+}
+
+int run_analyze(const AnalyzeOptions& o, const Globals& globals) {
+    std::vector<circ::CircularResult> results;
+    std::vector<Loaded> inputs;
+    try {
+        for (const auto& in : o.inputs) {
+            inputs.push_back(load_input(in, globals, o.store));
+            try {
+                results.push_back(circ::analyze_circular(inputs.back().trace.test, inputs.back().trace.samples));
+            } catch (const circ::CircularError& e) {
+                throw CliError(kExitUsage, in + ": " + e.what());
+            }
+        }
+        nlohmann::ordered_json all = nlohmann::ordered_json::array();
+        for (std::size_t i = 0; i < results.size(); ++i) {
+            auto j = circle_result_json(results[i], inputs[i].trace, o.tolerance_um);
+            if (!o.controller.empty()) j["controller"] = controller_json(results[i], o.controller);
+            if (inputs[i].session) {
+                storage::Store store(resolve_db_path(globals));
+                store.add_result(*inputs[i].session, "circular", j.dump(), std::nullopt, "ballbar circular/1");
+                j["session"] = *inputs[i].session;
+            }
+            all.push_back(j);
+        }
+        std::optional<circ::VolumetricResult> vol;
+        if (results.size() > 1) {
+            try {
+                vol = circ::combine_volumetric(results);
+            } catch (const circ::CircularError& e) {
+                throw CliError(kExitUsage, e.what());
+            }
+        }
+        if (o.json) {
+            if (results.size() == 1) {
+                std::cout << all[0].dump(2) << '\n';
+            } else {
+                nlohmann::ordered_json j = {{"tests", all}, {"volumetric", volumetric_json(*vol)}};
+                std::cout << j.dump(2) << '\n';
+            }
+        } else {
+            for (std::size_t i = 0; i < results.size(); ++i) {
+                std::cout << (results.size() > 1 ? "== " + inputs[i].name + "\n" : "");
+                print_circle_result(std::cout, results[i], inputs[i].trace, o.tolerance_um);
+                if (!o.controller.empty()) print_controller(std::cout, results[i], o.controller);
+                if (inputs[i].session) std::cout << "stored with session " << *inputs[i].session << '\n';
+            }
+            if (vol) print_volumetric(std::cout, *vol);
+        }
+        if (o.tolerance_um) {
+            for (const auto& r : results)
+                for (const auto& run : r.runs)
+                    if (run.circularity_um > *o.tolerance_um) return kExitFailure;
+        }
+        return kExitOk;
+    } catch (const storage::StorageError& e) {
+        throw cli_error(e);
+    }
+}
+
+}  // namespace
+}  // namespace ballbar::app
+
+BALLBAR_COMMAND(circle) {
+    using namespace ballbar::app;
+    auto* circle = root.add_subcommand("circle", "The ISO 230-4 circular test: plan, analyze");
+    circle->require_subcommand(1);
+
+    auto po = std::make_shared<PlanOptions>();
+    auto* plan = circle->add_subcommand("plan", "Write the part program of a circular test");
+    plan->add_option("--plane", po->plane, "XY, YZ or ZX")->capture_default_str();
+    plan->add_option("--radius", po->radius_mm, "programmed radius = bar length, mm")->capture_default_str();
+    plan->add_option("--centre", po->centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
+    plan->add_option("--feed", po->feed_mm_min, "feed of every move, mm/min")->capture_default_str();
+    plan->add_option("--feed-in", po->feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
+    plan->add_option("--arc", po->arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
+        ->capture_default_str();
+    plan->add_option("--overshoot", po->overshoot_deg, "overshoot each side, degrees (default 45 full, 20 partial)");
+    plan->add_option("--start", po->start_deg, "start angle of the first run, degrees (default 0 / −overshoot)");
+    plan->add_option("--directions", po->directions, "both, ccw or cw")
+        ->check(CLI::IsMember({"both", "ccw", "cw"}))
+        ->capture_default_str();
+    plan->add_option("--dialect", po->dialect, "fanuc or linuxcnc (default: the machine file's, else fanuc)");
+    plan->add_option("--machine", po->machine_file, "machine file: travel limits and dialect");
+    plan->add_option("--dwell", po->dwell_s, "stand still before each feed-in and at the end, s")
+        ->capture_default_str();
+    plan->add_option("--out", po->out, "program file (- for stdout)")->capture_default_str();
+    plan->add_option("--test-out", po->test_out, "write the test header (JSON) to this file too");
+    plan->add_flag("--store", po->store, "create a planned circular session holding the test header");
+    plan->callback([po, &globals] { globals.action = [po, &globals] { return run_plan(*po, globals); }; });
+
+    auto ao = std::make_shared<AnalyzeOptions>();
+    auto* an = circle->add_subcommand("analyze", "G, G(b), F and the diagnostics of a circular test");
+    an->add_option("INPUT", ao->inputs, "ballbar-trace/1 file or stored session (several: volumetric summary)")
+        ->required();
+    an->add_flag("--json", ao->json, "print the result as JSON");
+    an->add_flag("--store", ao->store, "import a trace file as a session and store the result with it");
+    an->add_option("--tolerance", ao->tolerance_um, "circular deviation G allowed, µm: pass/fail (exit 1 on fail)");
+    an->add_option("--controller", ao->controller,
+                   "print backlash/scale settings: linuxcnc, marlin, smoothieware, grblhal")
+        ->check(CLI::IsMember({"linuxcnc", "marlin", "smoothieware", "grblhal"}));
+    an->callback([ao, &globals] { globals.action = [ao, &globals] { return run_analyze(*ao, globals); }; });
+}

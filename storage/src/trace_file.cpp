@@ -1,0 +1,400 @@
+// SPDX-License-Identifier: MIT
+// ballbar-trace/1: parse (whole or refused with line and problem), write, store as a session, load.
+#include "ballbar/storage/trace_file.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "ballbar/storage/machine_json.hpp"
+#include "ballbar/storage/sqlite.hpp"
+
+namespace ballbar::storage {
+namespace {
+
+namespace circ = analysis::circular;
+using json = nlohmann::ordered_json;
+
+constexpr std::string_view kMagic = "# ballbar-trace/1";
+
+std::string_view trim(std::string_view s) {
+    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+    return s;
+}
+
+std::optional<double> parse_number(std::string_view s) {
+    s = trim(s);
+    if (s.empty()) return std::nullopt;
+    if (s.front() == '+') s.remove_prefix(1);
+    double v = 0;
+    const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc() || ptr != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+    return v;
+}
+
+std::string shortest(double v) {
+    char buf[64];
+    const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, v);
+    return ec == std::errc() ? std::string(buf, ptr) : std::to_string(v);
+}
+
+double need_number(const json& j, const char* key) {
+    if (!j.contains(key)) throw std::runtime_error(std::string("needs \"") + key + "\"");
+    if (!j[key].is_number()) throw std::runtime_error(std::string("\"") + key + "\" must be a number");
+    return j[key].get<double>();
+}
+
+circ::TestSpec test_from_json(const json& j) {
+    if (!j.is_object()) throw std::runtime_error("must be a JSON object");
+    if (!j.contains("kind") || j["kind"] != "circular")
+        throw std::runtime_error("\"kind\" must be \"circular\" (the only kind of this version)");
+    circ::TestSpec t;
+    if (!j.contains("plane") || !j["plane"].is_string()) throw std::runtime_error("needs \"plane\": XY, YZ or ZX");
+    const auto plane = circ::parse_plane(j["plane"].get<std::string>());
+    if (!plane) throw std::runtime_error("\"plane\" " + j["plane"].dump() + " is not XY, YZ or ZX");
+    t.plane = *plane;
+    t.radius_mm = need_number(j, "radius_mm");
+    t.feed_mm_min = need_number(j, "feed_mm_min");
+    t.feed_in_mm = need_number(j, "feed_in_mm");
+    if (!j.contains("centre_mm")) throw std::runtime_error("needs \"centre_mm\"");
+    const json& c = j["centre_mm"];
+    if (!c.is_array() || c.size() != 3) throw std::runtime_error("\"centre_mm\" must be an array of 3 numbers");
+    for (std::size_t i = 0; i < 3; ++i) {
+        if (!c[i].is_number()) throw std::runtime_error("\"centre_mm\" must be an array of 3 numbers");
+        t.centre_mm[i] = c[i].get<double>();
+    }
+    if (!j.contains("runs") || !j["runs"].is_array() || j["runs"].empty())
+        throw std::runtime_error("needs \"runs\", a non-empty array");
+    for (std::size_t i = 0; i < j["runs"].size(); ++i) {
+        const json& r = j["runs"][i];
+        const std::string where = "runs[" + std::to_string(i) + "]: ";
+        if (!r.is_object()) throw std::runtime_error(where + "must be an object");
+        circ::RunSpec run;
+        if (!r.contains("direction") || !r["direction"].is_string())
+            throw std::runtime_error(where + "needs \"direction\": ccw or cw");
+        const auto dir = circ::parse_direction(r["direction"].get<std::string>());
+        if (!dir) throw std::runtime_error(where + "\"direction\" " + r["direction"].dump() + " is not ccw or cw");
+        run.direction = *dir;
+        try {
+            run.start_deg = need_number(r, "start_deg");
+            run.overshoot_deg = need_number(r, "overshoot_deg");
+            run.data_arc_deg = need_number(r, "data_arc_deg");
+        } catch (const std::runtime_error& e) {
+            throw std::runtime_error(where + e.what());
+        }
+        t.runs.push_back(run);
+    }
+    if (const std::string bad = t.validate(); !bad.empty()) throw std::runtime_error(bad);
+    return t;
+}
+
+std::vector<std::string> split_lines(std::string_view text) {
+    std::vector<std::string> lines;
+    std::size_t start = 0;
+    while (start <= text.size()) {
+        const auto end = text.find('\n', start);
+        std::string_view line =
+            text.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        lines.emplace_back(line);
+        if (end == std::string_view::npos) break;
+        start = end + 1;
+    }
+    if (!lines.empty() && lines.back().empty()) lines.pop_back();
+    return lines;
+}
+
+bool is_key(std::string_view k) {
+    if (k.empty()) return false;
+    for (char c : k)
+        if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_')) return false;
+    return true;
+}
+
+}  // namespace
+
+bool looks_like_trace(std::string_view text) {
+    return text.rfind("# ballbar-trace/", 0) == 0;
+}
+
+std::string test_json(const circ::TestSpec& t) {
+    json j = {{"kind", "circular"},           {"plane", circ::plane_name(t.plane)},
+              {"radius_mm", t.radius_mm},     {"centre_mm", {t.centre_mm[0], t.centre_mm[1], t.centre_mm[2]}},
+              {"feed_mm_min", t.feed_mm_min}, {"feed_in_mm", t.feed_in_mm}};
+    json runs = json::array();
+    for (const auto& r : t.runs)
+        runs.push_back({{"direction", circ::direction_name(r.direction)},
+                        {"start_deg", r.start_deg},
+                        {"overshoot_deg", r.overshoot_deg},
+                        {"data_arc_deg", r.data_arc_deg}});
+    j["runs"] = runs;
+    return j.dump();
+}
+
+TraceFile parse_trace(std::string_view text) {
+    const auto lines = split_lines(text);
+    if (lines.empty()) throw TraceFileError(1, "empty file");
+    if (lines[0] != kMagic) {
+        if (lines[0].rfind("# ballbar-trace/", 0) == 0)
+            throw TraceFileError(1,
+                                 "unsupported format version \"" + lines[0].substr(2) + "\" (this is ballbar-trace/1)");
+        throw TraceFileError(1, "not a ballbar-trace/1 file (the first line must be \"# ballbar-trace/1\")");
+    }
+    TraceFile out;
+    bool have_test = false;
+    std::vector<std::string> seen;
+    std::size_t i = 1;
+    for (; i < lines.size(); ++i) {
+        const std::string& line = lines[i];
+        const int no = static_cast<int>(i + 1);
+        if (line.empty()) continue;
+        if (line[0] != '#') break;
+        const std::string_view body = trim(std::string_view(line).substr(1));
+        const auto colon = body.find(':');
+        if (colon == std::string_view::npos || !is_key(body.substr(0, colon))) continue;  // a comment
+        const std::string key(body.substr(0, colon));
+        const std::string value(trim(body.substr(colon + 1)));
+        static const char* known[] = {"test", "instrument", "machine", "operator", "started_at", "notes"};
+        const bool is_known = std::find_if(std::begin(known), std::end(known),
+                                           [&](const char* k) { return key == k; }) != std::end(known);
+        json j;
+        try {
+            j = json::parse(value);
+        } catch (const json::exception&) {
+            if (!is_known) continue;  // "# remark: text" is a comment
+            throw TraceFileError(no, "the value of \"" + key + "\" is not one line of JSON");
+        }
+        if (std::find(seen.begin(), seen.end(), key) != seen.end())
+            throw TraceFileError(no, "duplicate header \"" + key + "\"");
+        seen.push_back(key);
+        if (key == "test") {
+            try {
+                out.test = test_from_json(j);
+            } catch (const std::runtime_error& e) {
+                throw TraceFileError(no, std::string("test: ") + e.what());
+            }
+            have_test = true;
+        } else if (key == "instrument") {
+            try {
+                (void)instrument_from_json(value);
+            } catch (const std::exception& e) {
+                throw TraceFileError(no, std::string("instrument: ") + e.what());
+            }
+            out.instrument_json = j.dump();
+        } else if (key == "machine") {
+            out.machine_json = j.dump();
+        } else if (key == "operator" || key == "started_at" || key == "notes") {
+            if (!j.is_string()) throw TraceFileError(no, "\"" + key + "\" must be a JSON string");
+            (key == "operator" ? out.operator_name
+             : key == "notes"  ? out.notes
+                               : out.started_at) = j.get<std::string>();
+        } else {
+            out.extra.emplace_back(key, j.dump());
+        }
+    }
+    if (i >= lines.size()) throw TraceFileError(static_cast<int>(lines.size()), "no column row and no data");
+    const int header_no = static_cast<int>(i + 1);
+    if (!have_test) throw TraceFileError(header_no, "no \"# test: {…}\" header before the column row");
+    // Column row.
+    std::vector<std::string> cols;
+    {
+        std::stringstream ss(lines[i]);
+        std::string c;
+        while (std::getline(ss, c, ',')) cols.emplace_back(trim(c));
+        if (!lines[i].empty() && lines[i].back() == ',') cols.emplace_back();
+    }
+    int c_time = -1, c_len = -1, c_bar = -1, c_air = -1;
+    std::vector<std::string> unknown;
+    for (std::size_t k = 0; k < cols.size(); ++k) {
+        for (std::size_t m = 0; m < k; ++m)
+            if (cols[m] == cols[k]) throw TraceFileError(header_no, "column \"" + cols[k] + "\" appears twice");
+        const int idx = static_cast<int>(k);
+        if (cols[k] == "time_s")
+            c_time = idx;
+        else if (cols[k] == "measured_mm")
+            c_len = idx;
+        else if (cols[k] == "bar_temp_C")
+            c_bar = idx;
+        else if (cols[k] == "air_temp_C")
+            c_air = idx;
+        else
+            unknown.push_back(cols[k]);
+    }
+    if (c_time < 0) throw TraceFileError(header_no, "missing column \"time_s\"");
+    if (c_len < 0) throw TraceFileError(header_no, "missing column \"measured_mm\"");
+    if (!unknown.empty()) {
+        std::string list;
+        for (const auto& u : unknown) list += (list.empty() ? "\"" : ", \"") + u + "\"";
+        out.warnings.push_back("unknown column(s) " + list + " ignored");
+    }
+    std::vector<std::string_view> fields;
+    for (++i; i < lines.size(); ++i) {
+        const std::string& line = lines[i];
+        const int no = static_cast<int>(i + 1);
+        if (trim(line).empty()) continue;
+        if (line[0] == '#') throw TraceFileError(no, "a header line after the column row");
+        fields.clear();
+        std::string_view rest(line);
+        while (true) {
+            const auto comma = rest.find(',');
+            fields.push_back(rest.substr(0, comma));
+            if (comma == std::string_view::npos) break;
+            rest.remove_prefix(comma + 1);
+        }
+        if (fields.size() != cols.size())
+            throw TraceFileError(
+                no, std::to_string(fields.size()) + " fields where the column row has " + std::to_string(cols.size()));
+        const auto t = parse_number(fields[static_cast<std::size_t>(c_time)]);
+        if (!t)
+            throw TraceFileError(
+                no, "time_s \"" + std::string(fields[static_cast<std::size_t>(c_time)]) + "\" is not a number");
+        const auto m = parse_number(fields[static_cast<std::size_t>(c_len)]);
+        if (!m)
+            throw TraceFileError(
+                no, "measured_mm \"" + std::string(fields[static_cast<std::size_t>(c_len)]) + "\" is not a number");
+        if (*m <= 0.0) throw TraceFileError(no, "measured_mm must be > 0");
+        if (!out.samples.empty() && !(*t > out.samples.back().time_s))
+            throw TraceFileError(no, "time_s " + shortest(*t) + " is not after the previous row's (" +
+                                         shortest(out.samples.back().time_s) + "): it must strictly increase");
+        out.samples.push_back({*t, *m});
+        auto temp = [&](int c, std::vector<std::optional<double>>& into, const char* name) {
+            if (c < 0) return;
+            const std::string_view f = trim(fields[static_cast<std::size_t>(c)]);
+            if (f.empty()) return into.push_back(std::nullopt);
+            const auto v = parse_number(f);
+            if (!v) throw TraceFileError(no, std::string(name) + " \"" + std::string(f) + "\" is not a number");
+            into.push_back(v);
+        };
+        temp(c_bar, out.bar_temp_C, "bar_temp_C");
+        temp(c_air, out.air_temp_C, "air_temp_C");
+    }
+    if (out.samples.empty()) throw TraceFileError(header_no, "no data rows after the column row");
+    return out;
+}
+
+TraceFile read_trace_file(const std::filesystem::path& path) {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw TraceFileError(0, "cannot open " + path.string());
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return parse_trace(ss.str());
+}
+
+std::string format_trace(const TraceFile& t) {
+    std::string out(kMagic);
+    out += "\n# test: " + test_json(t.test) + "\n";
+    if (!t.instrument_json.empty()) out += "# instrument: " + t.instrument_json + "\n";
+    if (!t.machine_json.empty()) out += "# machine: " + t.machine_json + "\n";
+    if (!t.operator_name.empty()) out += "# operator: " + json(t.operator_name).dump() + "\n";
+    if (!t.started_at.empty()) out += "# started_at: " + json(t.started_at).dump() + "\n";
+    if (!t.notes.empty()) out += "# notes: " + json(t.notes).dump() + "\n";
+    for (const auto& [k, v] : t.extra) out += "# " + k + ": " + v + "\n";
+    const bool bar = !t.bar_temp_C.empty(), air = !t.air_temp_C.empty();
+    out += "time_s,measured_mm";
+    if (bar) out += ",bar_temp_C";
+    if (air) out += ",air_temp_C";
+    out += '\n';
+    out.reserve(out.size() + t.samples.size() * 32);
+    for (std::size_t i = 0; i < t.samples.size(); ++i) {
+        out += shortest(t.samples[i].time_s);
+        out += ',';
+        out += shortest(t.samples[i].measured_mm);
+        if (bar) out += "," + (i < t.bar_temp_C.size() && t.bar_temp_C[i] ? shortest(*t.bar_temp_C[i]) : "");
+        if (air) out += "," + (i < t.air_temp_C.size() && t.air_temp_C[i] ? shortest(*t.air_temp_C[i]) : "");
+        out += '\n';
+    }
+    return out;
+}
+
+std::int64_t import_trace(Store& store, const TraceFile& trace, const std::string& file_name, SessionSource source) {
+    NewSession ns;
+    ns.machine.name = "circular test";
+    if (!trace.instrument_json.empty()) ns.instrument = instrument_from_json(trace.instrument_json);
+    ns.source = source;
+    ns.operator_name = trace.operator_name;
+    ns.procedure = "circular";
+    ns.notes = trace.notes;
+    ns.started_at = trace.started_at;
+    // Samples hold nanometres from a reference length (an int32): half-way down the feed-in.
+    const double reference_mm = trace.test.radius_mm + 0.5 * trace.test.feed_in_mm;
+    json meta = {{"format", "ballbar-trace/1"},
+                 {"file", file_name},
+                 {"test", json::parse(test_json(trace.test))},
+                 {"reference_length_mm", reference_mm},
+                 {"has_bar_temp", !trace.bar_temp_C.empty()}};
+    if (!trace.machine_json.empty()) meta["machine"] = json::parse(trace.machine_json);
+    if (!trace.instrument_json.empty()) meta["instrument"] = json::parse(trace.instrument_json);
+    json extra = json::object();
+    for (const auto& [k, v] : trace.extra) extra[k] = json::parse(v);
+    meta["extra"] = extra;
+    if (!trace.air_temp_C.empty()) {
+        json air = json::array();
+        for (const auto& a : trace.air_temp_C) air.push_back(a ? json(*a) : json(nullptr));
+        meta["air_temp_C"] = air;
+    }
+    ns.metadata_json = meta.dump();
+
+    Transaction tx(store.db());
+    const std::int64_t id = store.create_session(ns);
+    store.start_session(id);
+    Statement ins(store.db(),
+                  "INSERT INTO samples(session_id, seq, device_time_us, displacement_nm, flags, bar_temp_mC) "
+                  "VALUES (?,?,?,?,?,?)");
+    for (std::size_t i = 0; i < trace.samples.size(); ++i) {
+        const double nm = std::round((trace.samples[i].measured_mm - reference_mm) * 1e6);
+        if (std::abs(nm) > 2.0e9)
+            throw StorageError(StorageError::Kind::invalid,
+                               "sample " + std::to_string(i + 1) + " is more than 2 mm from the reference length");
+        const double us = std::round(trace.samples[i].time_s * 1e6);
+        double temp_C = 20.0;
+        if (i < trace.bar_temp_C.size() && trace.bar_temp_C[i].has_value()) temp_C = *trace.bar_temp_C[i];
+        ins.bind(1, id)
+            .bind(2, static_cast<std::int64_t>(i))
+            .bind(3, static_cast<std::int64_t>(us))
+            .bind(4, static_cast<std::int64_t>(nm))
+            .bind(5, std::int64_t{0})
+            .bind(6, static_cast<std::int64_t>(std::llround(temp_C * 1000.0)));
+        ins.run();
+    }
+    store.transition(id, SessionState::completed, "import: " + file_name);
+    tx.commit();
+    return id;
+}
+
+TraceFile load_trace(Store& store, std::int64_t session_id) {
+    const SessionInfo info = store.session(session_id);
+    if (info.procedure != "circular")
+        throw std::runtime_error("session " + std::to_string(session_id) + " is not a circular test (procedure \"" +
+                                 info.procedure + "\")");
+    const json meta = json::parse(info.metadata_json.empty() ? "{}" : info.metadata_json);
+    if (!meta.contains("test"))
+        throw std::runtime_error("session " + std::to_string(session_id) + " has no test header");
+    TraceFile t;
+    t.test = test_from_json(meta["test"]);
+    const double reference_mm = meta.value("reference_length_mm", t.test.radius_mm);
+    const bool bar = meta.value("has_bar_temp", false);
+    if (meta.contains("instrument")) t.instrument_json = meta["instrument"].dump();
+    if (meta.contains("machine")) t.machine_json = meta["machine"].dump();
+    if (meta.contains("extra"))
+        for (const auto& [k, v] : meta["extra"].items()) t.extra.emplace_back(k, v.dump());
+    t.operator_name = info.operator_name;
+    t.notes = info.notes;
+    t.started_at = info.started_at;
+    Statement st(store.db(),
+                 "SELECT device_time_us, displacement_nm, bar_temp_mC FROM samples WHERE session_id = ? ORDER BY seq");
+    st.bind(1, session_id);
+    while (st.step()) {
+        t.samples.push_back({static_cast<double>(st.column_int(0)) * 1e-6,
+                             reference_mm + static_cast<double>(st.column_int(1)) * 1e-6});
+        if (bar) t.bar_temp_C.push_back(static_cast<double>(st.column_int(2)) / 1000.0);
+    }
+    if (meta.contains("air_temp_C"))
+        for (const auto& a : meta["air_temp_C"])
+            t.air_temp_C.push_back(a.is_null() ? std::nullopt : std::optional<double>(a.get<double>()));
+    return t;
+}
+
+}  // namespace ballbar::storage

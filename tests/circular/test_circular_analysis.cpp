@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: MIT
+// The circular analysis's behaviour beyond accuracy: unseparable effects reported as such, refused
+// traces, and the volumetric combination of three planes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "accuracy.hpp"
+
+namespace {
+
+using namespace ballbar::testgen;
+
+bool has_group_with(const circ::CircularResult& r, const std::vector<std::string>& keys) {
+    for (const auto& g : r.unseparable) {
+        bool all = true;
+        for (const auto& k : keys) all = all && std::find(g.keys.begin(), g.keys.end(), k) != g.keys.end();
+        if (all) return true;
+    }
+    return false;
+}
+
+GenSpec base_spec(int plane, bool partial) {
+    GenSpec s;
+    s.plane = plane;
+    s.radius_mm = 100.0;
+    s.feed_mm_min = 1000.0;
+    s.sample_hz = 500.0;
+    s.noise_um = 0.2;
+    s.runs = partial ? std::vector<GenRun>{{true, -20, 20, 180}, {false, 200, 20, 180}}
+                     : std::vector<GenRun>{{true, 0, 45, 360}, {false, 90, 45, 360}};
+    return s;
+}
+
+TEST(CircularAnalysis, OneDirectionCannotSeparateSquarenessFromServoMismatch) {
+    std::mt19937_64 rng(3);
+    GenSpec s = base_spec(0, false);
+    s.runs.resize(1);
+    GenEffects fx;
+    fx.squareness_um_per_m = 40.0;
+    const GenTrace g = generate(s, fx, rng);
+    const auto r = circ::analyze_circular(to_test(s), to_samples(g));
+    EXPECT_TRUE(has_group_with(r, {"squareness_um_per_m", "servo_mismatch_ms"}));
+    EXPECT_EQ(r.find(circ::Diag::Squareness), nullptr);
+    EXPECT_EQ(r.find(circ::Diag::ServoMismatch), nullptr);
+    EXPECT_FALSE(r.bidirectional_um.has_value());
+    for (const auto& grp : r.unseparable) {
+        if (grp.combined_key == "squareness_um_per_m") {
+            EXPECT_NEAR(grp.combined_value, 40.0, 2.0);
+        }
+    }
+}
+
+TEST(CircularAnalysis, OnePartialArcCannotSeparateBacklashOfTheReversingAxisFromTheCentre) {
+    std::mt19937_64 rng(4);
+    GenSpec s = base_spec(1, true);
+    s.runs.resize(1);
+    GenEffects fx;
+    fx.backlash_um = {6.0, 4.0};
+    const GenTrace g = generate(s, fx, rng);
+    const auto r = circ::analyze_circular(to_test(s), to_samples(g));
+    EXPECT_TRUE(has_group_with(r, {"backlash_y_um", "centre"}));
+    const auto* bq = r.find(circ::Diag::BacklashQ);
+    ASSERT_NE(bq, nullptr);  // z reverses inside the arc: still found
+    EXPECT_NEAR(bq->value, 4.0, 0.8);
+}
+
+TEST(CircularAnalysis, ReportsTheResidualAndRanksTheShares) {
+    std::mt19937_64 rng(5);
+    const GenSpec s = base_spec(0, false);
+    GenEffects fx;
+    fx.backlash_um = {8.0, 0.0};
+    fx.squareness_um_per_m = 20.0;  // 1 µm radial at R 100
+    const GenTrace g = generate(s, fx, rng);
+    const auto r = circ::analyze_circular(to_test(s), to_samples(g));
+    ASSERT_FALSE(r.diagnostics.empty());
+    EXPECT_EQ(r.diagnostics.front().diag, circ::Diag::BacklashP);
+    double total = 0.0;
+    for (const auto& d : r.diagnostics) total += d.share_percent;
+    EXPECT_NEAR(total, 100.0, 1e-6);
+    EXPECT_NEAR(r.residual_rms_um, s.noise_um, 0.05);
+    const auto* sq = r.find(circ::Diag::Squareness);
+    ASSERT_NE(sq, nullptr);
+    EXPECT_GT(sq->std_uncertainty, 0.0);
+    EXPECT_LT(std::abs(sq->value - 20.0), 5.0 * sq->std_uncertainty + 1.0);
+}
+
+TEST(CircularAnalysis, RefusesATraceThatEndsBeforeTheSecondRun) {
+    std::mt19937_64 rng(6);
+    const GenSpec s = base_spec(0, false);
+    GenTrace g = generate(s, GenEffects{}, rng);
+    g.time_s.resize(g.time_s.size() / 2), g.measured_mm.resize(g.time_s.size());
+    try {
+        circ::analyze_circular(to_test(s), to_samples(g));
+        FAIL() << "accepted a truncated trace";
+    } catch (const circ::CircularError& e) {
+        EXPECT_NE(std::string(e.what()).find("run 2 (cw)"), std::string::npos) << e.what();
+    }
+}
+
+TEST(CircularAnalysis, RefusesATraceWithoutFeedIn) {
+    std::vector<circ::TraceSample> flat;
+    for (int i = 0; i < 5000; ++i) flat.push_back({i * 0.002, 100.0});
+    EXPECT_THROW(circ::analyze_circular(to_test(base_spec(0, false)), flat), circ::CircularError);
+}
+
+TEST(CircularAnalysis, VolumetricCombinesThreePlanes) {
+    // One machine: per-axis backlash and scale, three squareness errors; XY full, YZ and ZX partial.
+    const double backlash[3] = {6.0, 3.0, 9.0}, scale[3] = {15.0, -10.0, 25.0};
+    const double square[3] = {30.0, -20.0, 45.0};  // XY, YZ, ZX
+    std::mt19937_64 rng(7);
+    std::vector<circ::CircularResult> planes;
+    for (int plane = 0; plane < 3; ++plane) {
+        GenSpec s = base_spec(plane, plane != 0);
+        const int ip = plane == 0 ? 0 : plane == 1 ? 1 : 2, iq = plane == 0 ? 1 : plane == 1 ? 2 : 0;
+        GenEffects fx;
+        fx.backlash_um = {backlash[ip], backlash[iq]};
+        fx.scale_ppm = {scale[ip], scale[iq]};
+        fx.squareness_um_per_m = square[plane];
+        const GenTrace g = generate(s, fx, rng);
+        planes.push_back(circ::analyze_circular(to_test(s), to_samples(g)));
+    }
+    const auto vol = circ::combine_volumetric(planes);
+    auto get = [&](const std::string& key) {
+        for (const auto& f : vol.figures)
+            if (f.key == key) return f;
+        ADD_FAILURE() << key;
+        return circ::VolumetricFigure{};
+    };
+    const char* axes[3] = {"x", "y", "z"};
+    for (int a = 0; a < 3; ++a) {
+        const auto b = get(std::string("backlash_") + axes[a] + "_um");
+        EXPECT_TRUE(b.known);
+        EXPECT_NEAR(b.value, backlash[a], 0.5) << axes[a];
+        const auto s = get(std::string("scale_") + axes[a] + "_ppm");
+        EXPECT_TRUE(s.known);
+        EXPECT_NEAR(s.value, scale[a], 3.0) << axes[a];
+        EXPECT_GT(s.std_uncertainty, 0.0);
+    }
+    EXPECT_NEAR(get("squareness_xy_um_per_m").value, square[0], 5.0);
+    EXPECT_NEAR(get("squareness_yz_um_per_m").value, square[1], 5.0);
+    EXPECT_NEAR(get("squareness_zx_um_per_m").value, square[2], 5.0);
+}
+
+}  // namespace

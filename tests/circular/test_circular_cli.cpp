@@ -1,0 +1,110 @@
+// SPDX-License-Identifier: MIT
+// The real `ballbar` binary on a circular test from the independent generator: import, analyze (text,
+// JSON keys, stored result, tolerance, controller), export --format trace, plan, refusals.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "../app/cli_harness.hpp"
+#include "trace_generator.hpp"
+
+namespace {
+
+using ballbar::test::run;
+using ballbar::test::TempDir;
+using namespace ballbar::testgen;
+
+std::string write_trace(const TempDir& dir) {
+    std::mt19937_64 rng(99);
+    GenSpec s;
+    s.radius_mm = 100.0, s.feed_mm_min = 2000.0, s.sample_hz = 400.0, s.noise_um = 0.2;
+    s.runs = {{true, 0, 45, 360}, {false, 90, 45, 360}};
+    GenEffects fx;
+    fx.backlash_um = {8.0, 5.0};
+    fx.squareness_um_per_m = 30.0;
+    const std::string path = dir.file("t.csv");
+    std::ofstream(path) << to_file(s, generate(s, fx, rng));
+    return path;
+}
+
+TEST(CircularCli, ImportAnalyzeStoreExport) {
+    TempDir dir;
+    const std::string trace = write_trace(dir);
+    const auto imp = run(dir, "import '" + trace + "' --json");
+    ASSERT_EQ(imp.code, 0) << imp.err;
+    const auto id = nlohmann::json::parse(imp.out)["session"].get<int>();
+    const auto an = run(dir, "circle analyze " + std::to_string(id) + " --json --tolerance 50");
+    ASSERT_EQ(an.code, 0) << an.err;
+    const auto j = nlohmann::json::parse(an.out);
+    ASSERT_EQ(j["runs"].size(), 2u);
+    EXPECT_EQ(j["runs"][0]["direction"], "ccw");
+    EXPECT_GT(j["runs"][0]["circularity_um"].get<double>(), 0.0);
+    EXPECT_TRUE(j["bidirectional_circularity_um"].is_number());
+    EXPECT_TRUE(j["radial_deviation_um"]["max"].is_number());
+    EXPECT_NEAR(j["diagnostics"]["backlash_x_um"].get<double>(), 8.0, 1.6);
+    EXPECT_NEAR(j["diagnostics"]["backlash_y_um"].get<double>(), 5.0, 1.0);
+    EXPECT_NEAR(j["diagnostics"]["squareness_um_per_m"].get<double>(), 30.0, 6.0);
+    EXPECT_TRUE(j["uncertainties"]["backlash_x_um"].is_number());
+    EXPECT_TRUE(j["shares_percent"]["backlash_x_um"].is_number());
+    EXPECT_TRUE(j["tolerance"]["pass"].get<bool>());
+    const auto show = run(dir, "sessions show " + std::to_string(id) + " --json");
+    EXPECT_NE(show.out.find("circular"), std::string::npos);
+
+    const auto fail = run(dir, "circle analyze '" + trace + "' --tolerance 1");
+    EXPECT_EQ(fail.code, 1);
+    EXPECT_NE(fail.out.find("FAIL"), std::string::npos);
+
+    const auto ctl = run(dir, "circle analyze '" + trace + "' --controller linuxcnc");
+    EXPECT_NE(ctl.out.find("[JOINT_0] BACKLASH = 0.00"), std::string::npos) << ctl.out;
+    const auto m425 = run(dir, "circle analyze '" + trace + "' --controller marlin --json");
+    EXPECT_NE(m425.out.find("M425 X0.00"), std::string::npos);
+
+    const auto ex = run(dir, "export " + std::to_string(id) + " --format trace --out '" + dir.file("back.csv") + "'");
+    ASSERT_EQ(ex.code, 0) << ex.err;
+    const auto again = run(dir, "circle analyze '" + dir.file("back.csv") + "' --json");
+    ASSERT_EQ(again.code, 0) << again.err;
+    EXPECT_NEAR(nlohmann::json::parse(again.out)["runs"][0]["circularity_um"].get<double>(),
+                j["runs"][0]["circularity_um"].get<double>(), 0.01);
+}
+
+TEST(CircularCli, RefusesAnInvalidTraceWithLineAndProblem) {
+    TempDir dir;
+    const std::string bad = std::string(BALLBAR_TEST_DATA_DIR) + "/traces/invalid/non_numeric.csv";
+    const auto imp = run(dir, "import '" + bad + "'");
+    EXPECT_EQ(imp.code, 2);
+    EXPECT_NE(imp.err.find("line 5"), std::string::npos) << imp.err;
+    const auto an = run(dir, "circle analyze '" + bad + "'");
+    EXPECT_EQ(an.code, 2);
+    const auto list = run(dir, "sessions --json");
+    EXPECT_EQ(list.out.find("circular"), std::string::npos);
+}
+
+TEST(CircularCli, PlanWritesBothDialectsAndChecksTravel) {
+    TempDir dir;
+    const auto fanuc = run(dir, "circle plan --plane XY --radius 100 --feed 1000");
+    ASSERT_EQ(fanuc.code, 0) << fanuc.err;
+    EXPECT_NE(fanuc.out.find("G17"), std::string::npos);
+    EXPECT_NE(fanuc.out.find("G3 X"), std::string::npos);
+    EXPECT_NE(fanuc.out.find("G2 X"), std::string::npos);
+    EXPECT_NE(fanuc.out.find("G4 P1000"), std::string::npos);
+    const auto lcnc =
+        run(dir, "circle plan --plane YZ --arc 180 --dialect linuxcnc --test-out '" + dir.file("t.json") + "'");
+    ASSERT_EQ(lcnc.code, 0) << lcnc.err;
+    EXPECT_NE(lcnc.out.find("G19"), std::string::npos);
+    EXPECT_NE(lcnc.out.find("G4 P1\n"), std::string::npos);
+    const auto stored = run(dir, "circle plan --plane XY --store --out '" + dir.file("p.nc") + "'");
+    ASSERT_EQ(stored.code, 0) << stored.err;
+    EXPECT_NE(stored.err.find("planned session 1"), std::string::npos) << stored.err;
+    const auto show = run(dir, "sessions show 1 --json");
+    EXPECT_NE(show.out.find("radius_mm"), std::string::npos) << show.out;
+    const auto header = nlohmann::json::parse(ballbar::test::slurp(dir.file("t.json")));
+    EXPECT_EQ(header["runs"][1]["start_deg"].get<double>(), 200.0);
+    const std::string machine = std::string(BALLBAR_TEST_DATA_DIR) + "/machines/tttrr.json";  // X ±400 mm
+    EXPECT_EQ(run(dir, "circle plan --radius 300 --machine '" + machine + "'").code, 0);
+    const auto out = run(dir, "circle plan --radius 450 --machine '" + machine + "'");
+    EXPECT_EQ(out.code, 2);
+    EXPECT_NE(out.err.find("travel of X"), std::string::npos) << out.err;
+}
+
+}  // namespace
