@@ -42,6 +42,7 @@ struct CompensateArgs {
 struct Model {
     ba::MachineGeometry machine;
     ba::ErrorParams params{};
+    std::vector<ba::LearnedTerm> empirical;  ///< learned by discovery (docs/discovery.md)
     std::string source;
 };
 
@@ -71,6 +72,17 @@ Model parse_model(const std::string& text, const std::string& source) {
         if (!item.value().is_number() || !std::isfinite(item.value().get<double>()))
             throw CliError(kExitUsage, source + ": params." + item.key() + ": must be a finite number");
         m.params[*p] = item.value().get<double>();
+    }
+    if (j.contains("empirical")) {  // terms learned by `discover`: angular error tables, positioning errors
+        if (!j["empirical"].is_object())
+            throw CliError(kExitUsage, source + ": \"empirical\" must be an object {\"C_angular_h1_cos\": value, ...}");
+        for (const auto& item : j["empirical"].items()) {
+            const auto t = ba::parse_empirical_term(item.key());
+            if (!t) throw CliError(kExitUsage, source + ": empirical." + item.key() + ": unknown term");
+            if (!item.value().is_number() || !std::isfinite(item.value().get<double>()))
+                throw CliError(kExitUsage, source + ": empirical." + item.key() + ": must be a finite number");
+            m.empirical.push_back({*t, item.value().get<double>(), 0.0});
+        }
     }
     return m;
 }
@@ -189,7 +201,7 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     const std::string text = read_file(args.program, "program");
     ba::CompensationOptions co;
     co.singular_tolerance = std::sin(ba::deg_to_rad(args.singular_deg));
-    const ba::Compensator comp(model.machine, model.params, co);
+    const ba::Compensator comp(model.machine, model.params, model.empirical, co);
     const bool second_is_c = ba::rotary_axes(model.machine.type).second == 'C';
 
     // Streams: one block is parsed, compensated and written at a time, in 1 MiB chunks.

@@ -217,7 +217,8 @@ void report_confounded_groups(const StepScores& sc, const DiscoveryOptions& opti
 /// The sparsest explanation: the subset S of testable candidates (|S| ≤ max_subset, members not
 /// confounded with each other) minimising −ΔRSS(S)/σ² + λ·|S|, λ the single-parameter F threshold.
 /// Empty when no subset beats the model as it is.
-std::vector<std::size_t> best_subset(const StepScores& sc, const DiscoveryOptions& options, double lambda) {
+std::vector<std::size_t> best_subset(const StepScores& sc, const DiscoveryOptions& options, double lambda,
+                                     double* cost_out = nullptr) {
     const std::size_t m = sc.scores.size();
     const double tol = options.min_independence * options.min_independence;
     std::vector<std::size_t> best, cur;
@@ -249,6 +250,7 @@ std::vector<std::size_t> best_subset(const StepScores& sc, const DiscoveryOption
         }
     };
     visit(visit, 0);
+    if (cost_out) *cost_out = best_cost;
     return best;
 }
 
@@ -394,12 +396,33 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
         std::swap(fit, f);
         const double moved = rebalance(ctx, fit, residuals_of(*data, fit), learned);
         std::swap(fit, f);
-        if (moved > 1e-3) {
+        if (moved > 0.05) {  // the terms moved by more than 5 % of their uncertainty: refit the rest
             apply_terms(readings, learned);
             f = fit_model(*data, params, f.model);
         }
         return f;
     };
+
+    // The noise floor (repeated points: from the base fit's residuals) and the search beyond the library.
+    out.noise_floor = estimate_noise_floor(readings, r, options.noise_mm);
+    const std::vector<EmpiricalFamily> families = empirical_families(readings);
+    std::optional<TermBasis> basis;
+    auto search_now = [&] {
+        if (!basis) basis = term_basis(readings, out.base_fit, base_offsets);
+        const std::vector<Eigen::Index> mcols = all_model_columns();
+        Eigen::MatrixXd mjac(n, static_cast<Eigen::Index>(mcols.size()));
+        Eigen::MatrixXd mgram(mjac.cols(), mjac.cols());
+        for (std::size_t i = 0; i < mcols.size(); ++i) {
+            mjac.col(static_cast<Eigen::Index>(i)) = ctx.jac.col(mcols[i]);
+            for (std::size_t j = 0; j < mcols.size(); ++j)
+                mgram(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = ctx.gram(mcols[i], mcols[j]);
+        }
+        const double alpha_s = out.noise_floor.known() ? options.search_alpha : options.search_alpha_unknown_floor;
+        detail::SearchInput in{
+            readings, mjac, mgram, r, *basis, families, learned.terms, alpha_s, options.min_independence};
+        return detail::search_beyond_library(in);
+    };
+    std::optional<detail::SearchOutput> pending;  // a search that beat the library's best step
 
     std::vector<const Effect*> open = candidates;  // still to test
     double alpha = options.family_alpha;
@@ -412,8 +435,30 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
             if (sc.scores.empty() || sc.sigma2 <= 0) break;
             alpha = options.family_alpha / static_cast<double>(sc.scores.size());
             report_confounded_groups(sc, options, out);
-            const std::vector<std::size_t> chosen = best_subset(sc, options, f_critical(alpha, 1.0, sc.dof));
+            double cost = 0;
+            const std::vector<std::size_t> chosen = best_subset(sc, options, f_critical(alpha, 1.0, sc.dof), &cost);
             if (chosen.empty()) break;
+            // With a known floor and structure above it, a family beyond the library may explain more:
+            // the larger of the two scores (ΔRSS/σ² − thresholds) goes first.
+            // (No search when the library's explanation already takes 90 % of the excess over the floor:
+            // no family could beat it.)
+            const double lambda = f_critical(alpha, 1.0, sc.dof);
+            const double explained = (lambda * static_cast<double>(chosen.size()) - cost) * sc.sigma2;
+            const double excess =
+                rss - (static_cast<double>(n) - unknowns()) * out.noise_floor.sigma_mm * out.noise_floor.sigma_mm;
+            if (out.noise_floor.known() && static_cast<int>(out.learned.size()) < options.max_learned &&
+                explained < 0.9 * excess &&
+                noise_verdict(r, unknowns(), out.noise_floor, options.noise_alpha).structure) {
+                // Both scored against the floor; the library is preferred unless the family explains
+                // clearly more (its score 20 % above the library's).
+                detail::SearchOutput found = search_now();
+                const double s2 = out.noise_floor.sigma_mm * out.noise_floor.sigma_mm;
+                const double lib_score = explained / s2 - lambda * static_cast<double>(chosen.size());
+                if (found.found && found.delta_rss_mm2 / s2 - found.penalty > 1.2 * lib_score) {
+                    pending = std::move(found);
+                    break;
+                }
+            }
             // The most visible member of the best explanation goes first.
             std::size_t first = chosen.front();
             for (std::size_t i : chosen)
@@ -457,28 +502,44 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
         }
     };
     library_steps();
+    // A library effect added while unexplained structure inflated the residual may owe its place to
+    // that structure: once a term explains it, each is tested again given the rest of the model.
+    auto withdraw_insignificant = [&] {
+        for (;;) {
+            DiscoveryStep* weakest = nullptr;
+            double weakest_f = 0;
+            int active = 0;
+            for (DiscoveryStep& st : out.steps) {
+                if (st.withdrawn) continue;
+                ++active;
+                const ParamEstimate* e = fit.find(param_info(st.effect->param).name);
+                if (!e || !e->observable || !(e->std > 0)) continue;
+                const double f = (e->estimate / e->std) * (e->estimate / e->std);
+                if (!weakest || f < weakest_f) {
+                    weakest = &st;
+                    weakest_f = f;
+                }
+            }
+            if (!weakest) return;
+            const double dof =
+                std::max(static_cast<double>(fit.degrees_of_freedom) - static_cast<double>(learned.terms.size()), 1.0);
+            if (f_distribution_sf(weakest_f, 1.0, dof) <= options.family_alpha / active) return;
+            weakest->withdrawn = true;
+            model.erase(std::find(model.begin(), model.end(), weakest->effect->param));
+            ErrorParams start = fit.model;
+            start[weakest->effect->param] = 0;
+            fit = refit_with_terms(model, start);
+            r = residuals_of(*data, fit);
+        }
+    };
 
-    // 3. The noise floor and the verdict; beyond the library while the residual is structure.
-    out.noise_floor = estimate_noise_floor(readings, r, options.noise_mm);
+    // 3. The verdict; beyond the library while the residual is structure.
     out.verdict_library = noise_verdict(r, unknowns(), out.noise_floor, options.noise_alpha);
     out.verdict = out.verdict_library;
-    const std::vector<EmpiricalFamily> families = empirical_families(readings);
-    std::optional<TermBasis> basis;
     for (int round = 0; round < options.max_learned; ++round) {
-        if (out.noise_floor.known() && !out.verdict.structure) break;
-        if (!basis) basis = term_basis(readings, out.base_fit, base_offsets);
-        const std::vector<Eigen::Index> mcols = all_model_columns();
-        Eigen::MatrixXd mjac(n, static_cast<Eigen::Index>(mcols.size()));
-        Eigen::MatrixXd mgram(mjac.cols(), mjac.cols());
-        for (std::size_t i = 0; i < mcols.size(); ++i) {
-            mjac.col(static_cast<Eigen::Index>(i)) = ctx.jac.col(mcols[i]);
-            for (std::size_t j = 0; j < mcols.size(); ++j)
-                mgram(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = ctx.gram(mcols[i], mcols[j]);
-        }
-        const double alpha_s = out.noise_floor.known() ? options.search_alpha : options.search_alpha_unknown_floor;
-        detail::SearchInput in{
-            readings, mjac, mgram, r, *basis, families, learned.terms, alpha_s, options.min_independence};
-        detail::SearchOutput found = detail::search_beyond_library(in);
+        if (out.noise_floor.known() && !out.verdict.structure && !pending) break;
+        detail::SearchOutput found = pending ? std::move(*pending) : search_now();
+        pending.reset();
         for (const std::string& s : found.not_searchable)
             if (std::find(out.not_searchable.begin(), out.not_searchable.end(), s) == out.not_searchable.end())
                 out.not_searchable.push_back(s);
@@ -504,23 +565,25 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
             if (std::abs(st.terms[k].value) * found.columns[k].norm() >
                 std::abs(st.terms[main].value) * found.columns[main].norm())
                 main = k;
-        std::string label;
-        st.trend_before = detail::term_trend(readings, *basis, st.terms[main].term, r, &st.trend_unit, &label);
-        st.trend_after = detail::term_trend(readings, *basis, st.terms[main].term, r_new, &st.trend_unit, &label);
+        st.trend_before = detail::term_trend(readings, *basis, st.terms[main].term, r, &st.trend_unit, &st.trend_label);
+        st.trend_after =
+            detail::term_trend(readings, *basis, st.terms[main].term, r_new, &st.trend_unit, &st.trend_label);
         st.trend_before.variable = st.trend_after.variable = ExplainingVariable::bar_direction;
         fit = std::move(refit);
         r = r_new;
         out.learned.push_back(std::move(st));
         library_steps();
+        withdraw_insignificant();
         out.verdict = noise_verdict(r, unknowns(), out.noise_floor, options.noise_alpha);
     }
     // The learned terms' final values and uncertainties (joint with the final model).
     if (!learned.terms.empty()) {
-        rebalance(ctx, fit, r, learned);
-        apply_terms(readings, learned);
-        fit = fit_model(*data, model, fit.model);
-        r = residuals_of(*data, fit);
-        rebalance(ctx, fit, r, learned);  // uncertainties at the solution; the step is below tolerance
+        if (rebalance(ctx, fit, r, learned) > 0.05) {
+            apply_terms(readings, learned);
+            fit = fit_model(*data, model, fit.model);
+            r = residuals_of(*data, fit);
+            rebalance(ctx, fit, r, learned);  // uncertainties at the solution; the step is below tolerance
+        }
         out.verdict = noise_verdict(r, unknowns(), out.noise_floor, options.noise_alpha);
         std::size_t k = 0;
         for (EmpiricalStep& st : out.learned) {
@@ -533,7 +596,7 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
     // Steps report the final model's estimates (an effect added early is re-estimated as later ones
     // join it).
     for (DiscoveryStep& st : out.steps)
-        if (const ParamEstimate* e = fit.find(param_info(st.effect->param).name); e && e->observable) {
+        if (const ParamEstimate* e = fit.find(param_info(st.effect->param).name); !st.withdrawn && e && e->observable) {
             st.estimate = e->estimate;
             st.std_error = e->std;
         }

@@ -99,13 +99,13 @@ NoiseFloor estimate_noise_floor(const ReadingSet& readings, const Eigen::VectorX
     // Repeated points: readings at the same socket and pose; the spread of their residuals about
     // their group's mean.
     if (residual_mm.size() == static_cast<Eigen::Index>(readings.readings.size())) {
-        using Key = std::tuple<long long, long long, long long, long long, long long, long long, long long,
-                               long long, long long>;
+        using Key = std::tuple<long long, long long, long long, long long, long long, long long, long long, long long,
+                               long long>;
         auto q = [](double v) { return static_cast<long long>(std::llround(v * 1e6)); };
         std::map<Key, std::pair<std::vector<double>, int>> groups;
         for (std::size_t i = 0; i < readings.readings.size(); ++i) {
             const Reading& r = readings.readings[i];
-            const Key k{q(r.pose.X_mm), q(r.pose.Y_mm), q(r.pose.Z_mm), q(r.pose.A_rad), q(r.pose.B_rad),
+            const Key k{q(r.pose.X_mm),  q(r.pose.Y_mm),     q(r.pose.Z_mm),     q(r.pose.A_rad),   q(r.pose.B_rad),
                         q(r.pose.C_rad), q(r.socket_mm.x()), q(r.socket_mm.y()), q(r.socket_mm.z())};
             groups[k].first.push_back(residual_mm[static_cast<Eigen::Index>(i)]);
         }

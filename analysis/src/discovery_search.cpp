@@ -30,7 +30,8 @@ Eigen::MatrixXd sub(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& i
     const auto k = static_cast<Eigen::Index>(idx.size());
     Eigen::MatrixXd out(k, k);
     for (Eigen::Index i = 0; i < k; ++i)
-        for (Eigen::Index j = 0; j < k; ++j) out(i, j) = m(idx[static_cast<std::size_t>(i)], idx[static_cast<std::size_t>(j)]);
+        for (Eigen::Index j = 0; j < k; ++j)
+            out(i, j) = m(idx[static_cast<std::size_t>(i)], idx[static_cast<std::size_t>(j)]);
     return out;
 }
 
@@ -96,13 +97,15 @@ SearchOutput search_beyond_library(const SearchInput& in) {
     const auto q = static_cast<Eigen::Index>(cols.size());
     if (q == 0) return out;
     Eigen::MatrixXd e(n, q);
-    for (Eigen::Index j = 0; j < q; ++j) e.col(j) = cols[static_cast<std::size_t>(j)].raw / cols[static_cast<std::size_t>(j)].norm;
+    for (Eigen::Index j = 0; j < q; ++j)
+        e.col(j) = cols[static_cast<std::size_t>(j)].raw / cols[static_cast<std::size_t>(j)].norm;
 
     // Project the model out: P = EᵀE − EᵀJ (JᵀJ)⁺ JᵀE, t = Eᵀr − EᵀJ (JᵀJ)⁺ Jᵀr.
     const Eigen::MatrixXd gem = e.transpose() * in.model_jac;
     const Eigen::MatrixXd gpinv = pinv_psd(in.model_gram);
     const Eigen::MatrixXd p = e.transpose() * e - gem * gpinv * gem.transpose();
-    const Eigen::VectorXd t = e.transpose() * in.residual_mm - gem * (gpinv * (in.model_jac.transpose() * in.residual_mm));
+    const Eigen::VectorXd t =
+        e.transpose() * in.residual_mm - gem * (gpinv * (in.model_jac.transpose() * in.residual_mm));
 
     // Terms the model already makes (independence below min_independence) are not searched.
     const double tol = in.min_independence * in.min_independence;
@@ -118,8 +121,9 @@ SearchOutput search_beyond_library(const SearchInput& in) {
     std::size_t group_count = 0;
     for (auto& fg : groups) {
         for (auto& g : fg)
-            g.erase(std::remove_if(g.begin(), g.end(), [&ok](Eigen::Index j) { return !ok[static_cast<std::size_t>(j)]; }),
-                    g.end());
+            g.erase(
+                std::remove_if(g.begin(), g.end(), [&ok](Eigen::Index j) { return !ok[static_cast<std::size_t>(j)]; }),
+                g.end());
         fg.erase(std::remove_if(fg.begin(), fg.end(), [](const auto& g) { return g.empty(); }), fg.end());
         group_count += fg.size();
     }
@@ -223,6 +227,7 @@ SearchOutput search_beyond_library(const SearchInput& in) {
             best_family = static_cast<int>(f);
         }
         chosen[f] = s;
+        if (fs.passes && fs.score > best_score) out.penalty = penalty;
         out.step.families.push_back(fs);
     }
     std::stable_sort(out.step.families.begin(), out.step.families.end(),
@@ -254,6 +259,9 @@ SearchOutput search_beyond_library(const SearchInput& in) {
             st.dof2 = fs.dof2;
         }
     st.threshold_p = alpha_g;
+    out.score = best_score;
+    for (const FamilyScore& fs : st.families)
+        if (fs.family == st.family) out.delta_rss_mm2 = fs.delta_rss_mm2;
     out.found = true;
     return out;
 }
@@ -416,14 +424,18 @@ std::string describe(const std::string& family, std::span<const LearnedTerm> ter
         case EmpiricalKind::linear_positioning: {
             out = "the " + ax + " axis: non-linear positioning error,";
             for (const LearnedTerm& l : terms)
-                out += std::string(l.term.order == 2 ? " quadratic " : l.term.order == 3 ? " cubic " : " order-n ") +
+                out += std::string(l.term.order == 2   ? " quadratic "
+                                   : l.term.order == 3 ? " cubic "
+                                                       : " order-n ") +
                        fmt("%.3g", l.value * 1e3) + " µm at " + ax + " = 100 mm";
             return out;
         }
         default:
             break;
     }
-    out = family == "time" ? "drift during the test:" : family == "bar_direction" ? "a constant offset:" : "with " + family + ":";
+    out = family == "time"            ? "drift during the test:"
+          : family == "bar_direction" ? "a constant offset:"
+                                      : "with " + family + ":";
     for (const LearnedTerm& l : terms) {
         const std::string u = l.term.unit();
         double f = 1;

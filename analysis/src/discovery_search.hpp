@@ -15,7 +15,7 @@ namespace ballbar::analysis::detail {
 
 struct SearchInput {
     const ReadingSet& readings;
-    const Eigen::MatrixXd& model_jac;  ///< unit-norm columns of the current model (parameters, sockets, learned terms)
+    const Eigen::MatrixXd& model_jac;   ///< unit-norm columns of the current model (parameters, sockets, learned terms)
     const Eigen::MatrixXd& model_gram;  ///< their Gram matrix
     const Eigen::VectorXd& residual_mm;
     const TermBasis& basis;
@@ -27,8 +27,10 @@ struct SearchInput {
 
 struct SearchOutput {
     bool found = false;
-    EmpiricalStep step;  ///< terms with their estimates, the family table, the test
-    std::vector<Eigen::VectorXd> columns;  ///< raw Jacobian columns of step.terms
+    double score = 0;                       ///< the winning family's ΔRSS/σ² − Σ thresholds
+    double delta_rss_mm2 = 0, penalty = 0;  ///< its ΔRSS and Σ thresholds (in units of σ²)
+    EmpiricalStep step;                     ///< terms with their estimates, the family table, the test
+    std::vector<Eigen::VectorXd> columns;   ///< raw Jacobian columns of step.terms
     std::vector<std::string> not_searchable;
 };
 

@@ -106,7 +106,8 @@ std::optional<EmpiricalTerm> parse_empirical_term(std::string_view name) {
     const std::string n(name);
     if (n.size() >= 14 && (n[0] == 'A' || n[0] == 'B' || n[0] == 'C') && n.substr(1, 10) == "_angular_h") {
         const std::string rest = n.substr(11);  // "<k>_cos"
-        if (rest.size() == 5 && rest[0] >= '1' && rest[0] <= '9' && (rest.substr(1) == "_cos" || rest.substr(1) == "_sin")) {
+        if (rest.size() == 5 && rest[0] >= '1' && rest[0] <= '9' &&
+            (rest.substr(1) == "_cos" || rest.substr(1) == "_sin")) {
             t.kind = EmpiricalKind::rotary_angular;
             t.axis = n[0];
             t.order = rest[0] - '0';
@@ -138,10 +139,9 @@ std::optional<EmpiricalTerm> parse_empirical_term(std::string_view name) {
         std::string_view text;
         EmpiricalKind kind;
     };
-    for (const Prefix& p : {Prefix{"pivot_drift_", EmpiricalKind::pivot_drift},
-                            Prefix{"bar_temp_pivot_", EmpiricalKind::bar_temp_pivot},
-                            Prefix{"air_temp_pivot_", EmpiricalKind::air_temp_pivot},
-                            Prefix{"tool_offset_", EmpiricalKind::tool_offset}})
+    for (const Prefix& p :
+         {Prefix{"pivot_drift_", EmpiricalKind::pivot_drift}, Prefix{"bar_temp_pivot_", EmpiricalKind::bar_temp_pivot},
+          Prefix{"air_temp_pivot_", EmpiricalKind::air_temp_pivot}, Prefix{"tool_offset_", EmpiricalKind::tool_offset}})
         if (starts(p.text) && name.size() == p.text.size() + 1 && dir(name.back())) {
             t.kind = p.kind;
             t.axis = name.back();

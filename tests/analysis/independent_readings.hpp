@@ -27,9 +27,15 @@ using V3 = Eigen::Vector3d;
 using M3 = Eigen::Matrix3d;
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
-inline M3 rx(double a) { return Eigen::AngleAxisd(a, V3::UnitX()).toRotationMatrix(); }
-inline M3 ry(double a) { return Eigen::AngleAxisd(a, V3::UnitY()).toRotationMatrix(); }
-inline M3 rz(double a) { return Eigen::AngleAxisd(a, V3::UnitZ()).toRotationMatrix(); }
+inline M3 rx(double a) {
+    return Eigen::AngleAxisd(a, V3::UnitX()).toRotationMatrix();
+}
+inline M3 ry(double a) {
+    return Eigen::AngleAxisd(a, V3::UnitY()).toRotationMatrix();
+}
+inline M3 rz(double a) {
+    return Eigen::AngleAxisd(a, V3::UnitZ()).toRotationMatrix();
+}
 /// x turned by `angle` about the line through q along unit d.
 inline V3 turn(const V3& q, const V3& d, double angle, const V3& x) {
     return q + Eigen::AngleAxisd(angle, d.normalized()) * (x - q);
@@ -38,7 +44,8 @@ inline V3 turn(const V3& q, const V3& d, double angle, const V3& x) {
 struct Machine {
     std::string type = "TTTRR";  // "TTTRR", "RRTTT", "RTTTR"
     V3 tool = V3::Zero(), a_pivot = V3::Zero(), c_offset = V3::Zero();
-    std::map<std::string, double> err;  // location errors, zero offsets, EXX.., C0Y.., bar_length, bar_kappa, spindle_growth
+    std::map<std::string, double>
+        err;  // location errors, zero offsets, EXX.., C0Y.., bar_length, bar_kappa, spindle_growth
     // Outside the library.
     char angular_axis = 0;
     int angular_order = 1;
@@ -74,19 +81,21 @@ struct Readings {
     std::string machine_json() const {
         char buf[400];
         if (m.type == "TTTRR")
-            std::snprintf(buf, sizeof buf,
-                          "{\"type\":\"TTTRR\",\"name\":\"indep\",\"a_pivot_mm\":[%.6f,%.6f,%.6f],\"c_offset_mm\":[%.6f,"
-                          "%.6f,%.6f],\"tool_ball_mm\":[%.6f,%.6f,%.6f]}",
-                          m.a_pivot.x(), m.a_pivot.y(), m.a_pivot.z(), m.c_offset.x(), m.c_offset.y(), m.c_offset.z(),
-                          m.tool.x(), m.tool.y(), m.tool.z());
+            std::snprintf(
+                buf, sizeof buf,
+                "{\"type\":\"TTTRR\",\"name\":\"indep\",\"a_pivot_mm\":[%.6f,%.6f,%.6f],\"c_offset_mm\":[%.6f,"
+                "%.6f,%.6f],\"tool_ball_mm\":[%.6f,%.6f,%.6f]}",
+                m.a_pivot.x(), m.a_pivot.y(), m.a_pivot.z(), m.c_offset.x(), m.c_offset.y(), m.c_offset.z(), m.tool.x(),
+                m.tool.y(), m.tool.z());
         else if (m.type == "RRTTT")
             std::snprintf(buf, sizeof buf, "{\"type\":\"RRTTT\",\"name\":\"indep\",\"tool_ball_mm\":[%.6f,%.6f,%.6f]}",
                           m.tool.x(), m.tool.y(), m.tool.z());
         else
-            std::snprintf(buf, sizeof buf,
-                          "{\"type\":\"RTTTR\",\"name\":\"indep\",\"tool_ball_mm\":[%.6f,%.6f,%.6f],\"a_pivot_mm\":[%.6f,"
-                          "%.6f,%.6f]}",
-                          m.tool.x(), m.tool.y(), m.tool.z(), m.a_pivot.x(), m.a_pivot.y(), m.a_pivot.z());
+            std::snprintf(
+                buf, sizeof buf,
+                "{\"type\":\"RTTTR\",\"name\":\"indep\",\"tool_ball_mm\":[%.6f,%.6f,%.6f],\"a_pivot_mm\":[%.6f,"
+                "%.6f,%.6f]}",
+                m.tool.x(), m.tool.y(), m.tool.z(), m.a_pivot.x(), m.a_pivot.y(), m.a_pivot.z());
         return buf;
     }
 
@@ -99,9 +108,9 @@ struct Readings {
         char line[512];
         for (const Row& r : rows) {
             std::snprintf(line, sizeof line,
-                          "%.7f,%d,%.7f,%.1f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%d,%d\n", r.measured, r.n,
-                          r.std_mm, r.t, r.r1_deg, r.r2_deg, r.X, r.Y, r.Z, r.socket.x(), r.socket.y(), r.socket.z(),
-                          r.bar_T, r.air_T, r.location, r.point);
+                          "%.7f,%d,%.7f,%.1f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%d,%d\n", r.measured,
+                          r.n, r.std_mm, r.t, r.r1_deg, r.r2_deg, r.X, r.Y, r.Z, r.socket.x(), r.socket.y(),
+                          r.socket.z(), r.bar_T, r.air_T, r.location, r.point);
             out += line;
         }
         return out;
@@ -171,8 +180,10 @@ inline Balls actual_balls(const Machine& m, const Row& r, double approach1, doub
     const V3 b_dir = rz(e("C0B")) * rx(e("A0B")) * V3::UnitY();
     const V3 c_dir = ry(e("B0C")) * rx(e("A0C")) * V3::UnitZ();
     const V3 tool = m.tool - V3(0, 0, e("tool_length"));
-    const int k = r.location / 1000;  // socket index
-    const V3 socket = r.socket + (k < static_cast<int>(m.socket_offsets.size()) ? m.socket_offsets[static_cast<std::size_t>(k)] : V3::Zero());
+    const int k = (r.location % 100000) / 1000;  // socket index
+    const V3 socket =
+        r.socket +
+        (k < static_cast<int>(m.socket_offsets.size()) ? m.socket_offsets[static_cast<std::size_t>(k)] : V3::Zero());
     Balls out;
     if (m.type == "TTTRR") {
         const V3 qa = m.a_pivot + V3(0, e("Y0A"), e("Z0A"));
@@ -191,6 +202,23 @@ inline Balls actual_balls(const Machine& m, const Row& r, double approach1, doub
         out.s = turn(qa, a_dir, a1, m.a_pivot + socket);
     }
     return out;
+}
+
+/// TTTRR: the tool ball of the actual machine in the table frame (where it is on the workpiece).
+inline V3 actual_tool_in_table(const Machine& m, const Row& r) {
+    const Balls balls = actual_balls(m, r, 0, 0);
+    const double h = r.t / 3600.0;
+    auto e = [&](const std::string& k) { return m.e(k) + (k == m.drift_param ? m.drift_per_h * h : 0.0); };
+    double a1 = r.r1_deg * kDeg + e("A_zero"), a2 = r.r2_deg * kDeg + e("C_zero");
+    if (m.angular_axis == 'A')
+        a1 += m.angular_amp_rad * std::cos(m.angular_order * r.r1_deg * kDeg - m.angular_phase_rad);
+    if (m.angular_axis == 'C')
+        a2 += m.angular_amp_rad * std::cos(m.angular_order * r.r2_deg * kDeg - m.angular_phase_rad);
+    const V3 a_dir = rz(e("C0A")) * ry(e("B0A")) * V3::UnitX();
+    const V3 c_dir = ry(e("B0C")) * rx(e("A0C")) * V3::UnitZ();
+    const V3 qa = m.a_pivot + V3(0, e("Y0A"), e("Z0A"));
+    const V3 qc = m.a_pivot + m.c_offset + V3(e("X0C"), e("Y0C"), 0);
+    return turn(qc, c_dir, -a2, turn(qa, a_dir, -a1, balls.b)) - (m.a_pivot + m.c_offset);
 }
 
 /// The nominal table ball (machine frame) and the command that puts the nominal tool ball at `target`.
@@ -258,7 +286,9 @@ inline std::vector<V3> plan_sockets(const std::string& type) {
     return {V3(10, 110, 40), V3(110, -50, 40), V3(-90, -70, 70)};
 }
 
-inline Readings generate(const Machine& m, std::mt19937_64& rng, double bar_mm = 100.0) {
+/// The plan measured `repeat` times in one session, `seconds_per_reading` apart.
+inline Readings generate(const Machine& m, std::mt19937_64& rng, int repeat = 1, double seconds_per_reading = 12.0,
+                         double bar_mm = 100.0) {
     Readings out;
     out.m = m;
     std::normal_distribution<double> gauss(0.0, 1.0);
@@ -273,42 +303,43 @@ inline Readings generate(const Machine& m, std::mt19937_64& rng, double bar_mm =
     double t = 0;
     double prev1 = 0, prev2 = 0, app1 = 0, app2 = 0;
     bool first = true;
-    for (std::size_t k = 0; k < sockets.size(); ++k)
-        for (std::size_t p = 0; p < pairs.size(); ++p) {
-            const auto [a1, a2] = pairs[p];
-            if (!first) {
-                if (a1 != prev1) app1 = a1 > prev1 ? 1 : -1;
-                if (a2 != prev2) app2 = a2 > prev2 ? 1 : -1;
+    for (int rep = 0; rep < repeat; ++rep)
+        for (std::size_t k = 0; k < sockets.size(); ++k)
+            for (std::size_t p = 0; p < pairs.size(); ++p) {
+                const auto [a1, a2] = pairs[p];
+                if (!first) {
+                    if (a1 != prev1) app1 = a1 > prev1 ? 1 : -1;
+                    if (a2 != prev2) app2 = a2 > prev2 ? 1 : -1;
+                }
+                first = false;
+                prev1 = a1;
+                prev2 = a2;
+                const V3 s_nom = nominal_table_ball(m, a1, a2, sockets[k]);
+                for (std::size_t d = 0; d < dirs.size(); ++d) {
+                    Row r;
+                    r.t = t;
+                    t += seconds_per_reading;
+                    r.r1_deg = a1;
+                    r.r2_deg = a2;
+                    r.socket = sockets[k];
+                    r.location = static_cast<int>(k * 1000 + p) + rep * 100000;
+                    r.point = static_cast<int>(d);
+                    const V3 cmd = command_for(m, a1, a2, s_nom + bar_mm * dirs[d]);
+                    r.X = cmd.x();
+                    r.Y = cmd.y();
+                    r.Z = cmd.z();
+                    r.bar_T = 20.4 + 0.8 * r.t / 3600.0 + 0.3 * std::sin(2 * 3.14159265358979 * r.t / 1700.0);
+                    r.air_T = 20.2 + 0.5 * r.t / 3600.0 + 0.2 * std::sin(2 * 3.14159265358979 * r.t / 2300.0);
+                    const Balls balls = actual_balls(m, r, app1, app2);
+                    const double len = (balls.b - balls.s).norm();
+                    r.measured =
+                        len * (1 + m.e("bar_kappa") * (r.bar_T - 20.0)) + m.e("bar_length") + m.noise_mm * gauss(rng);
+                    r.n = m.samples;
+                    r.std_mm =
+                        m.noise_mm * std::sqrt(static_cast<double>(m.samples)) * std::sqrt(chi2(rng) / (m.samples - 1));
+                    out.rows.push_back(r);
+                }
             }
-            first = false;
-            prev1 = a1;
-            prev2 = a2;
-            const V3 s_nom = nominal_table_ball(m, a1, a2, sockets[k]);
-            for (std::size_t d = 0; d < dirs.size(); ++d) {
-                Row r;
-                r.t = t;
-                t += 12.0;
-                r.r1_deg = a1;
-                r.r2_deg = a2;
-                r.socket = sockets[k];
-                r.location = static_cast<int>(k * 1000 + p);
-                r.point = static_cast<int>(d);
-                const V3 cmd = command_for(m, a1, a2, s_nom + bar_mm * dirs[d]);
-                r.X = cmd.x();
-                r.Y = cmd.y();
-                r.Z = cmd.z();
-                r.bar_T = 20.4 + 0.8 * r.t / 3600.0 + 0.3 * std::sin(2 * 3.14159265358979 * r.t / 1700.0);
-                r.air_T = 20.2 + 0.5 * r.t / 3600.0 + 0.2 * std::sin(2 * 3.14159265358979 * r.t / 2300.0);
-                const Balls balls = actual_balls(m, r, app1, app2);
-                const double len = (balls.b - balls.s).norm();
-                r.measured = len * (1 + m.e("bar_kappa") * (r.bar_T - 20.0)) + m.e("bar_length") +
-                             m.noise_mm * gauss(rng);
-                r.n = m.samples;
-                r.std_mm = m.noise_mm * std::sqrt(static_cast<double>(m.samples)) *
-                           std::sqrt(chi2(rng) / (m.samples - 1));
-                out.rows.push_back(r);
-            }
-        }
     // Locations numbered from 0 in the file.
     int loc = 0;
     int last = -1;
@@ -338,8 +369,7 @@ inline const std::vector<std::string>& kinds() {
 
 /// `kind` outside the library on a random machine of `type`; with `with_library`, one library effect
 /// (scale of X, spindle growth, bar length offset, squareness XY in turn by seed) next to it.
-inline Scenario make_scenario(const std::string& type, const std::string& kind, bool with_library,
-                              std::uint64_t seed) {
+inline Scenario make_scenario(const std::string& type, const std::string& kind, bool with_library, std::uint64_t seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     auto sign = [&] { return u(rng) < 0.5 ? -1.0 : 1.0; };

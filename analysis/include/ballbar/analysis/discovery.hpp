@@ -126,7 +126,7 @@ struct EmpiricalStep {
     /// The residual seen as the term's own quantity (an angle error, a positioning error, …) in bins of
     /// its variable, before and after the step; `trend_unit` is that quantity's unit.
     VariableTrend trend_before, trend_after;
-    std::string trend_unit;
+    std::string trend_unit, trend_label;
     std::vector<FamilyScore> families;  ///< every family of the search, best first
 };
 
@@ -154,6 +154,9 @@ struct DiscoveryStep {
     VariableTrend trend_before, trend_after;
     std::vector<CandidateScore> candidates;  ///< every candidate of the step, best first
     ErrorParams model_after{};               ///< the model's parameters after the step's refit
+    /// Taken out again: once a learned term explained the structure, its F-test given the rest of the
+    /// model no longer passed (Bonferroni over the library effects in the model).
+    bool withdrawn = false;
 };
 
 struct DiscoveryResult {

@@ -48,9 +48,9 @@ enum class EmpiricalKind {
 
 struct EmpiricalTerm {
     EmpiricalKind kind = EmpiricalKind::rotary_angular;
-    char axis = 'C';  ///< rotary 'A'/'B'/'C', linear 'X'/'Y'/'Z', or the pivot/tool direction 'x'/'y'/'z'
-    int order = 1;    ///< harmonic order (angular) or polynomial power (positioning)
-    bool sine = false;  ///< angular: the sin kθ coefficient
+    char axis = 'C';              ///< rotary 'A'/'B'/'C', linear 'X'/'Y'/'Z', or the pivot/tool direction 'x'/'y'/'z'
+    int order = 1;                ///< harmonic order (angular) or polynomial power (positioning)
+    bool sine = false;            ///< angular: the sin kθ coefficient
     Param location = Param::X0C;  ///< location_drift: the drifting location error
 
     std::string name() const;
@@ -89,7 +89,7 @@ std::vector<double> approach_direction(const ReadingSet& readings, char axis);
 struct TermBasis {
     Eigen::MatrixXd grad;  ///< per reading: ∂reading/∂(A_zero, B_zero, C_zero, the location errors…)
     std::vector<Param> grad_params;
-    Eigen::MatrixXd u;  ///< per reading: the nominal bar direction (machine frame)
+    Eigen::MatrixXd u;                        ///< per reading: the nominal bar direction (machine frame)
     std::vector<double> dir_a, dir_b, dir_c;  ///< approach directions
 };
 TermBasis term_basis(const ReadingSet& readings, const ErrorParams& e, std::span<const Vec3> socket_offsets_mm);
