@@ -104,7 +104,6 @@ int main(int argc, char** argv) {
     }
     std::printf("clean readings: %d false alarms of %d (%.2f %%)\n", alarms, clean_total,
                 100.0 * alarms / std::max(clean_total, 1));
-    std::printf("campaign took %.1f s\n",
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    std::printf("campaign took %.1f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     return 0;
 }
