@@ -56,6 +56,7 @@ struct CompensateArgs {
 struct Model {
     ba::MachineGeometry machine;
     ba::ErrorParams params{};
+    std::vector<ba::LearnedTerm> empirical;  ///< learned by discovery (docs/discovery.md)
     std::string source;
 };
 
@@ -85,6 +86,17 @@ Model parse_model(const std::string& text, const std::string& source) {
         if (!item.value().is_number() || !std::isfinite(item.value().get<double>()))
             throw CliError(kExitUsage, source + ": params." + item.key() + ": must be a finite number");
         m.params[*p] = item.value().get<double>();
+    }
+    if (j.contains("empirical")) {  // terms learned by `discover`: angular error tables, positioning errors
+        if (!j["empirical"].is_object())
+            throw CliError(kExitUsage, source + ": \"empirical\" must be an object {\"C_angular_h1_cos\": value, ...}");
+        for (const auto& item : j["empirical"].items()) {
+            const auto t = ba::parse_empirical_term(item.key());
+            if (!t) throw CliError(kExitUsage, source + ": empirical." + item.key() + ": unknown term");
+            if (!item.value().is_number() || !std::isfinite(item.value().get<double>()))
+                throw CliError(kExitUsage, source + ": empirical." + item.key() + ": must be a finite number");
+            m.empirical.push_back({*t, item.value().get<double>(), 0.0});
+        }
     }
     return m;
 }
@@ -333,6 +345,7 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     co.decimals = args.decimals;
     co.solver.max_iterations = args.max_iterations;
     co.allow_truncated = args.allow_truncated;
+    co.empirical = model.empirical;  // terms learned by discover (angular tables, positioning errors)
     co.title = "compensated by ballbar with " + model.source;
 
     OutputFile out(args.out);

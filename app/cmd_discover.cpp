@@ -10,12 +10,14 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "ballbar/analysis/discovery.hpp"
 #include "ballbar/analysis/effects.hpp"
 #include "ballbar/analysis/identify.hpp"
+#include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/sqlite.hpp"
@@ -33,6 +35,7 @@ struct DiscoverOptions {
     std::vector<std::string> inputs;
     std::string model;
     std::string save_model;
+    std::optional<double> noise_um;
     bool json = false;
 };
 
@@ -91,19 +94,83 @@ json result_json(const ba::DiscoveryResult& r) {
                          {"rms_after_um", st.rms_after_mm * 1e3},
                          {"criterion", st.criterion},
                          {"value", st.value},
-                         {"explained_by", std::string(ba::to_string(st.explained_by, r.type))}});
-    return {{"base_model", param_names(r.base_model)},
-            {"rms_initial_um", r.rms_initial_mm * 1e3},
-            {"steps", steps},
-            {"rms_final_um", r.rms_final_mm * 1e3},
-            {"confounded", r.confounded},
-            {"unidentifiable", r.unidentifiable}};
+                         {"explained_by", std::string(ba::to_string(st.explained_by, r.type))},
+                         {"kind", "library"},
+                         {"accepted", !st.withdrawn}});
+    for (std::size_t i = 0; i < r.steps.size(); ++i)
+        if (r.steps[i].withdrawn)
+            steps[i]["withdrawn"] =
+                "no longer passes given the learned terms (F-test, Bonferroni over the model's "
+                "library effects)";
+    for (const ba::EmpiricalStep& st : r.learned) {
+        json terms = json::object(), stderrs = json::object(), units = json::object();
+        for (const ba::LearnedTerm& t : st.terms) {
+            terms[t.term.name()] = t.value;
+            stderrs[t.term.name()] = t.std_error;
+            units[t.term.name()] = t.term.unit();
+        }
+        steps.push_back({{"effect", st.family},
+                         {"kind", "empirical"},
+                         {"where", st.description},
+                         {"terms", terms},
+                         {"terms_stderr", stderrs},
+                         {"terms_unit", units},
+                         {"rms_before_um", st.rms_before_mm * 1e3},
+                         {"rms_after_um", st.rms_after_mm * 1e3},
+                         {"criterion", "F"},
+                         {"value", st.f},
+                         {"dof", {st.dof1, st.dof2}},
+                         {"p_value", st.p_value},
+                         {"threshold_p", st.threshold_p},
+                         {"explained_by", st.variable}});
+    }
+    auto verdict = [](const ba::NoiseVerdict& v) {
+        json j{{"result", v.text}, {"rms_um", v.rms_mm * 1e3}};
+        if (v.floor_known) {
+            j["ratio"] = v.ratio;
+            j["statistic"] = "chi-square";
+            j["chi2"] = v.chi2;
+            j["dof"] = v.dof;
+            j["p_value"] = v.p_value;
+            j["alpha"] = v.alpha;
+        }
+        return j;
+    };
+    json out{{"base_model", param_names(r.base_model)},
+             {"rms_initial_um", r.rms_initial_mm * 1e3},
+             {"steps", steps},
+             {"rms_final_um", r.rms_final_mm * 1e3},
+             {"confounded", r.confounded},
+             {"unidentifiable", r.unidentifiable},
+             {"noise_floor_um", r.noise_floor.known() ? json(r.noise_floor.sigma_mm * 1e3) : json(nullptr)},
+             {"noise_source", r.noise_floor.source},
+             {"noise_detail", r.noise_floor.detail},
+             {"verdict_before_search", verdict(r.verdict_library)},
+             {"verdict", verdict(r.verdict)}};
+    if (!r.unlocated.empty()) out["unlocated"] = r.unlocated;
+    return out;
+}
+
+/// The learned terms as the stored model holds them ({"C_angular_h1_cos": value, ...}).
+json empirical_json(std::span<const ba::LearnedTerm> terms) {
+    json e = json::object();
+    for (const ba::LearnedTerm& t : terms) e[t.term.name()] = t.value;
+    return e;
 }
 
 json params_json(const std::vector<ba::Param>& model, const ba::ErrorParams& values) {
     json p = json::object();
     for (ba::Param q : model) p[std::string(ba::param_info(q).name)] = values[q];
     return p;
+}
+
+/// The display unit of a learned step's variable (detail::term_trend's bin centres).
+std::string x_unit(const ba::EmpiricalStep& st) {
+    if (st.family.find("_angular") != std::string::npos) return "°";
+    if (st.family.find("_positioning") != std::string::npos) return "mm";
+    if (st.family == "time") return "min";
+    if (st.family == "bar_temperature" || st.family == "air_temperature") return "°C";
+    return "";
 }
 
 /// What the stored result holds beyond the printed JSON: the criterion and the residual analysis.
@@ -132,18 +199,41 @@ json details_json(const ba::DiscoveryResult& r, const std::vector<std::string>& 
                                {"bin_centre", st.trend_before.bin_centre},
                                {"before_um", um(st.trend_before.bin_mean_mm)},
                                {"after_um", um(st.trend_after.bin_mean_mm)}});
+    for (const ba::EmpiricalStep& st : r.learned) {
+        json families = json::array();
+        for (const ba::FamilyScore& f : st.families)
+            families.push_back({{"family", f.family},
+                                {"variable", f.variable},
+                                {"terms", f.terms},
+                                {"f", f.f},
+                                {"dof", {f.dof1, f.dof2}},
+                                {"p_value", f.p_value},
+                                {"passes", f.passes}});
+        step_trends.push_back({{"variable", st.variable},
+                               {"bin_centre", st.trend_before.bin_centre},
+                               {"before_um", um(st.trend_before.bin_mean_mm)},
+                               {"after_um", um(st.trend_after.bin_mean_mm)},
+                               {"x_unit", x_unit(st)},
+                               {"y_label", st.trend_label},
+                               {"y_unit", st.trend_unit},
+                               {"search", families}});
+    }
     return {{"inputs", inputs},
             {"criterion", r.criterion_text},
             {"final_model", params_json(r.final_model, r.final_fit.model)},
+            {"learned_terms", empirical_json(r.learned_terms)},
             {"residuals_initial", trends(r.initial_residuals)},
             {"residuals_final", trends(r.final_residuals)},
             {"step_trends", step_trends}};
 }
 
 /// Stores the result with every input session and the extended model, one version per step.
-void store_result(storage::Store& store, const Inputs& in, const ba::DiscoveryResult& r, const std::string& name) {
-    storage::ModelRecord rec = store.save_model(name, json{{"params", params_json(r.base_model, r.base_fit)}}.dump(),
-                                                in.sessions, std::nullopt, "discovery: base model");
+void store_result(storage::Store& store, const Inputs& in, const ba::DiscoveryResult& r, const std::string& name,
+                  const ba::MachineGeometry& machine) {
+    const json geometry = json::parse(storage::machine_to_json(machine));
+    storage::ModelRecord rec =
+        store.save_model(name, json{{"machine", geometry}, {"params", params_json(r.base_model, r.base_fit)}}.dump(),
+                         in.sessions, std::nullopt, "discovery: base model");
     std::vector<ba::Param> model = r.base_model;
     for (const ba::DiscoveryStep& st : r.steps) {
         model.push_back(st.effect->param);
@@ -151,9 +241,26 @@ void store_result(storage::Store& store, const Inputs& in, const ba::DiscoveryRe
         std::snprintf(note, sizeof note, "discovery: added %s%s%s, RMS %.3f -> %.3f um",
                       std::string(st.effect->id).c_str(), st.effect->iso.empty() ? "" : " ",
                       std::string(st.effect->iso).c_str(), st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
-        rec = store.save_model(
-            name, json{{"params", params_json(model, st.model_after)}, {"added", std::string(st.effect->id)}}.dump(),
-            in.sessions, rec.id, note);
+        rec = store.save_model(name,
+                               json{{"machine", geometry},
+                                    {"params", params_json(model, st.model_after)},
+                                    {"added", std::string(st.effect->id)}}
+                                   .dump(),
+                               in.sessions, rec.id, note);
+    }
+    std::vector<ba::LearnedTerm> learned;
+    for (const ba::EmpiricalStep& st : r.learned) {
+        learned.insert(learned.end(), st.terms.begin(), st.terms.end());
+        char note[300];
+        std::snprintf(note, sizeof note, "discovery: learned %s (%s), RMS %.3f -> %.3f um", st.family.c_str(),
+                      st.description.c_str(), st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
+        rec = store.save_model(name,
+                               json{{"machine", geometry},
+                                    {"params", params_json(r.final_model, r.final_fit.model)},
+                                    {"empirical", empirical_json(learned)},
+                                    {"added", st.family}}
+                                   .dump(),
+                               in.sessions, rec.id, note);
     }
     json payload = result_json(r);
     payload["details"] = details_json(r, in.names);
@@ -177,20 +284,52 @@ void print_table(const ba::DiscoveryResult& r, const ba::ReadingSet& set, const 
     std::printf(" + socket offsets\n");
     std::printf("initial residual RMS %.3f um (best explained by %s)\n\n", r.rms_initial_mm * 1e3,
                 std::string(ba::to_string(r.initial_residuals.best, r.type)).c_str());
+    if (r.noise_floor.known())
+        std::printf("noise floor %.3f um (%s: %s)\n", r.noise_floor.sigma_mm * 1e3, r.noise_floor.source.c_str(),
+                    r.noise_floor.detail.c_str());
+    else
+        std::printf("noise floor unknown (%s)\n", r.noise_floor.detail.c_str());
     if (r.steps.empty()) {
-        std::printf("no effect passes the criterion: what is left is noise at this model\n");
+        std::printf("no effect of the library passes the criterion\n");
     } else {
         std::printf("%-4s %-24s %-5s %14s %10s %-6s %21s %10s  %s\n", "step", "effect", "ISO", "estimate", "std",
                     "unit", "RMS before -> after", "F", "explained by");
         int i = 1;
         for (const ba::DiscoveryStep& st : r.steps)
-            std::printf("%-4d %-24s %-5s %14s %10s %-6s %9.3f -> %6.3f um %10.1f  %s\n", i++,
+            std::printf("%-4d %-24s %-5s %14s %10s %-6s %9.3f -> %6.3f um %10.1f  %s%s\n", i++,
                         std::string(st.effect->id).c_str(), std::string(st.effect->iso).c_str(),
                         format_value(st.estimate).c_str(), format_value(st.std_error).c_str(),
                         std::string(ba::to_string(st.effect->unit())).c_str(), st.rms_before_mm * 1e3,
-                        st.rms_after_mm * 1e3, st.value, std::string(ba::to_string(st.explained_by, r.type)).c_str());
+                        st.rms_after_mm * 1e3, st.value, std::string(ba::to_string(st.explained_by, r.type)).c_str(),
+                        st.withdrawn ? "  (withdrawn: not significant given the learned terms)" : "");
     }
-    std::printf("\nfinal residual RMS %.3f um\n", r.rms_final_mm * 1e3);
+    auto verdict_line = [](const char* when, const ba::NoiseVerdict& v) {
+        if (!v.floor_known) {
+            std::printf(
+                "%s: residual RMS %.3f um; the noise floor is unknown, so whether it is noise cannot be "
+                "decided (give --noise-um)\n",
+                when, v.rms_mm * 1e3);
+            return;
+        }
+        std::printf("%s: residual RMS %.3f um = %.2fx the noise floor: %s (chi-square %.1f on %.0f dof, p = %.3g%s)\n",
+                    when, v.rms_mm * 1e3, v.ratio, v.structure ? "UNEXPLAINED STRUCTURE" : "consistent with noise",
+                    v.chi2, v.dof, v.p_value, v.structure ? ", below the threshold" : "");
+    };
+    verdict_line("\nbefore the search beyond the library", r.verdict_library);
+    for (const ba::EmpiricalStep& st : r.learned) {
+        std::printf("\nbeyond the library: %s\n", st.description.c_str());
+        std::printf("  found in %s (family %s): F = %.1f on (%.0f, %.0f) dof, p = %.3g < %.3g; RMS %.3f -> %.3f um\n",
+                    st.variable.c_str(), st.family.c_str(), st.f, st.dof1, st.dof2, st.p_value, st.threshold_p,
+                    st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
+        for (const ba::LearnedTerm& t : st.terms)
+            std::printf("  learned %-22s %12s +- %-10s %s\n", t.term.name().c_str(), format_value(t.value).c_str(),
+                        format_value(t.std_error).c_str(), t.term.unit().c_str());
+        if (st.families.size() > 1)
+            std::printf("  next best: %s (F = %.1f)\n", st.families[1].family.c_str(), st.families[1].f);
+    }
+    if (!r.unlocated.empty()) std::printf("\nunexplained structure not located: %s\n", r.unlocated.c_str());
+    verdict_line("\nfinal", r.verdict);
+    std::printf("final residual RMS %.3f um\n", r.rms_final_mm * 1e3);
     for (const auto& g : r.confounded) {
         std::printf("confounded (the readings cannot tell these apart):");
         for (const auto& n : g) std::printf(" %s", n.c_str());
@@ -214,6 +353,11 @@ int run_discover(const DiscoverOptions& o, const Globals& globals) {
         throw CliError(kExitUsage, std::string("cannot combine the inputs: ") + e.what());
     }
     ba::DiscoveryOptions opt;
+    if (o.noise_um) {
+        if (!(*o.noise_um > 0) || !std::isfinite(*o.noise_um))
+            throw CliError(kExitUsage, "--noise-um: must be a positive number of micrometres");
+        opt.noise_mm = *o.noise_um * 1e-3;
+    }
     if (!o.model.empty()) {
         try {
             opt.base_model = ba::parse_model(o.model, set.machine.type);
@@ -231,7 +375,7 @@ int run_discover(const DiscoverOptions& o, const Globals& globals) {
         const std::string name = !o.save_model.empty()
                                      ? o.save_model
                                      : (set.machine.name.empty() ? "machine" : set.machine.name) + "-discovered";
-        store_result(*store, in, r, name);
+        store_result(*store, in, r, name, set.machine);
     }
     if (o.json)
         std::cout << result_json(r).dump() << std::endl;
@@ -255,6 +399,8 @@ BALLBAR_COMMAND(discover) {
                     "errors and zero offsets (default)");
     sub->add_option("--save-model", opts->save_model,
                     "Name of the extended model stored with the sessions (default <machine>-discovered)");
+    sub->add_option("--noise-um", opts->noise_um,
+                    "Noise of one reading in um (default: from the readings' n/std_mm or repeated points)");
     sub->add_flag("--json", opts->json, "Print the result as JSON");
     sub->callback([opts, &globals] { globals.action = [opts, &globals] { return run_discover(*opts, globals); }; });
 }

@@ -96,6 +96,13 @@ MachineModel::MachineModel(const MachineGeometry& geom, const ErrorParams& e) : 
     }
 }
 
+MachineModel::MachineModel(const MachineGeometry& geom, const ErrorParams& e, std::span<const LearnedTerm> terms)
+    : MachineModel(geom, e) {
+    for (const LearnedTerm& t : terms)
+        if (t.term.kind == EmpiricalKind::rotary_angular || t.term.kind == EmpiricalKind::linear_positioning)
+            terms_.push_back(t);
+}
+
 MachineModel::Trig MachineModel::trig(MachineType type, const Pose& pose) {
     const double r1 = rotary_angle(type, pose, 0);
     const double r2 = rotary_angle(type, pose, 1);
@@ -109,6 +116,23 @@ ToolPose MachineModel::tool_pose(const Pose& pose) const {
 ToolPose MachineModel::tool_pose(const Pose& pose, const Trig& tr) const {
     // Rotation matrices are built once per pose and applied to vectors; their products are never
     // formed (two matrix products cost more than the four matrix-vector products they save).
+    if (!terms_.empty()) {  // learned terms: the axes' actual positions, then the model as it is
+        Pose p = pose;
+        p.X_mm += linear_positioning_error(terms_, 'X', pose.X_mm);
+        p.Y_mm += linear_positioning_error(terms_, 'Y', pose.Y_mm);
+        p.Z_mm += linear_positioning_error(terms_, 'Z', pose.Z_mm);
+        const RotaryAxes ax = rotary_axes(geom_.type);
+        const double e1 = rotary_angle_error(terms_, ax.first, rotary_angle(geom_.type, pose, 0));
+        const double e2 = rotary_angle_error(terms_, ax.second, rotary_angle(geom_.type, pose, 1));
+        const double c1 = std::cos(e1), s1 = std::sin(e1), c2 = std::cos(e2), s2 = std::sin(e2);
+        const Trig shifted{tr.c1 * c1 - tr.s1 * s1, tr.s1 * c1 + tr.c1 * s1, tr.c2 * c2 - tr.s2 * s2,
+                           tr.s2 * c2 + tr.c2 * s2};
+        return static_pose(p, shifted);
+    }
+    return static_pose(pose, tr);
+}
+
+ToolPose MachineModel::static_pose(const Pose& pose, const Trig& tr) const {
     const Vec3 pivot = detail::linear_axes(e_, pose);
     const Mat3 ra = first_.rotation(tr.c1, tr.s1);
     const Mat3 rb = second_.rotation(tr.c2, tr.s2);
@@ -151,7 +175,11 @@ Pose add_correction(MachineType type, const Pose& u, const std::array<double, 5>
 }
 
 Compensator::Compensator(const MachineGeometry& geom, const ErrorParams& e, CompensationOptions options)
-    : nominal_(geom, ErrorParams{}), actual_(geom, e), options_(options) {
+    : Compensator(geom, e, {}, options) {}
+
+Compensator::Compensator(const MachineGeometry& geom, const ErrorParams& e, std::span<const LearnedTerm> terms,
+                         CompensationOptions options)
+    : nominal_(geom, ErrorParams{}), actual_(geom, e, terms), options_(options) {
     if (!(options_.singular_tolerance >= 0 && options_.singular_tolerance < 1))
         throw AnalysisError("compensation: singular_tolerance must be in [0, 1)");
     if (options_.max_iterations < 1) throw AnalysisError("compensation: max_iterations must be at least 1");

@@ -12,6 +12,7 @@
 #include <numeric>
 
 #include "ballbar/analysis/kinematics.hpp"
+#include "discovery_search.hpp"
 
 namespace ballbar::analysis {
 namespace {
@@ -213,21 +214,11 @@ void report_confounded_groups(const StepScores& sc, const DiscoveryOptions& opti
     }
 }
 
-/// The F value a single added parameter must exceed at false-alarm rate `alpha`.
-double f_critical(double alpha, double dof) {
-    double lo = 0, hi = 1;
-    while (f_distribution_sf(hi, 1.0, dof) > alpha && hi < 1e12) hi *= 2;
-    for (int i = 0; i < 100 && hi - lo > 1e-9 * hi; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (f_distribution_sf(mid, 1.0, dof) > alpha ? lo : hi) = mid;
-    }
-    return hi;
-}
-
 /// The sparsest explanation: the subset S of testable candidates (|S| ≤ max_subset, members not
 /// confounded with each other) minimising −ΔRSS(S)/σ² + λ·|S|, λ the single-parameter F threshold.
 /// Empty when no subset beats the model as it is.
-std::vector<std::size_t> best_subset(const StepScores& sc, const DiscoveryOptions& options, double lambda) {
+std::vector<std::size_t> best_subset(const StepScores& sc, const DiscoveryOptions& options, double lambda,
+                                     double* cost_out = nullptr) {
     const std::size_t m = sc.scores.size();
     const double tol = options.min_independence * options.min_independence;
     std::vector<std::size_t> best, cur;
@@ -259,6 +250,7 @@ std::vector<std::size_t> best_subset(const StepScores& sc, const DiscoveryOption
         }
     };
     visit(visit, 0);
+    if (cost_out) *cost_out = best_cost;
     return best;
 }
 
@@ -274,6 +266,78 @@ ExplainingVariable best_variable(const Eigen::VectorXd& r, const Eigen::MatrixXd
         }
     }
     return out;
+}
+
+}  // namespace
+
+namespace {
+
+/// The learned terms of the workflow: their values, raw and unit columns (appended to the context's
+/// Jacobian), and the readings with their contribution taken off (what the library fit sees).
+struct Learned {
+    std::vector<LearnedTerm> terms;
+    std::vector<Eigen::VectorXd> raw;
+    std::vector<double> norm;
+    std::vector<Eigen::Index> cols;  ///< their columns in ctx.jac
+    ReadingSet corrected;
+};
+
+void append_columns(StepContext& ctx, const std::vector<Eigen::VectorXd>& raw, Learned& learned) {
+    const Eigen::Index old = ctx.jac.cols();
+    const auto k = static_cast<Eigen::Index>(raw.size());
+    ctx.jac.conservativeResize(Eigen::NoChange, old + k);
+    for (Eigen::Index j = 0; j < k; ++j) {
+        const double norm = raw[static_cast<std::size_t>(j)].norm();
+        ctx.jac.col(old + j) = raw[static_cast<std::size_t>(j)] / norm;
+        learned.raw.push_back(raw[static_cast<std::size_t>(j)]);
+        learned.norm.push_back(norm);
+        learned.cols.push_back(old + j);
+    }
+    const Eigen::MatrixXd cross = ctx.jac.transpose() * ctx.jac.rightCols(k);
+    Eigen::MatrixXd g(old + k, old + k);
+    g.topLeftCorner(old, old) = ctx.gram;
+    g.rightCols(k) = cross;
+    g.bottomRows(k) = cross.transpose();
+    ctx.gram = std::move(g);
+}
+
+/// The readings with the learned terms' contribution taken off.
+void apply_terms(const ReadingSet& readings, Learned& learned) {
+    learned.corrected = readings;
+    for (std::size_t j = 0; j < learned.terms.size(); ++j)
+        for (std::size_t i = 0; i < readings.readings.size(); ++i)
+            learned.corrected.readings[i].measured_mm -=
+                learned.terms[j].value * learned.raw[j][static_cast<Eigen::Index>(i)];
+}
+
+/// One Gauss–Newton step of the learned terms against the current fit (their part of the joint
+/// least-squares step, the model's columns projected out); returns the change in σ units.
+double rebalance(const StepContext& ctx, const FitSummary& fit, const Eigen::VectorXd& r, Learned& learned,
+                 double* sigma2_out = nullptr) {
+    if (learned.terms.empty()) return 0;
+    const Projection proj(ctx.gram, model_columns(ctx, fit));
+    const Eigen::VectorXd g = ctx.jac.transpose() * r;
+    const Eigen::VectorXd gm = proj.gmm_pinv * proj.model_part(g);
+    const auto k = static_cast<Eigen::Index>(learned.cols.size());
+    Eigen::MatrixXd p(k, k);
+    Eigen::VectorXd t(k);
+    for (Eigen::Index i = 0; i < k; ++i) {
+        const Eigen::Index ci = learned.cols[static_cast<std::size_t>(i)];
+        t[i] = g[ci] - proj.cross(ctx.gram, ci).dot(gm);
+        for (Eigen::Index j = 0; j < k; ++j)
+            p(i, j) = proj.inner(ctx.gram, ci, learned.cols[static_cast<std::size_t>(j)]);
+    }
+    const Eigen::MatrixXd inv = p.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+    const Eigen::VectorXd dc = inv * t;
+    const double dof = static_cast<double>(r.size()) - static_cast<double>(proj.model.size()) - static_cast<double>(k);
+    const double sigma2 = std::max(r.squaredNorm() - t.dot(dc), 1e-300) / std::max(dof, 1.0);
+    if (sigma2_out) *sigma2_out = sigma2;
+    for (Eigen::Index i = 0; i < k; ++i) {
+        auto& l = learned.terms[static_cast<std::size_t>(i)];
+        l.value += dc[i] / learned.norm[static_cast<std::size_t>(i)];
+        l.std_error = std::sqrt(sigma2 * inv(i, i)) / learned.norm[static_cast<std::size_t>(i)];
+    }
+    return dc.norm() / std::sqrt(sigma2);
 }
 
 }  // namespace
@@ -299,16 +363,14 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
     // base model's fit.
     out.base_model = model;
     out.base_fit = fit.model;
+    std::vector<Vec3> base_offsets;
+    for (const auto& s : fit.sockets) base_offsets.push_back(s.offset_mm);
 
     // 2. One Jacobian over the model and every candidate, at the base fit; unit-scaled columns.
     StepContext ctx{readings, options, model, {}, {}, explaining_variables(readings)};
     std::vector<const Effect*> candidates = candidate_effects(type, requested);
     for (const Effect* c : candidates) ctx.columns.push_back(c->param);
-    {
-        std::vector<Vec3> offsets;
-        for (const auto& s : fit.sockets) offsets.push_back(s.offset_mm);
-        ctx.jac = reading_jacobian(readings, fit.model, ctx.columns, offsets, true);
-    }
+    ctx.jac = reading_jacobian(readings, fit.model, ctx.columns, base_offsets, true);
     for (Eigen::Index j = 0; j < ctx.jac.cols(); ++j) {
         const double norm = ctx.jac.col(j).norm();
         if (norm > 0) ctx.jac.col(j) /= norm;
@@ -319,72 +381,235 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
     out.rms_initial_mm = fit.residual_rms_mm;
     out.initial_residuals = analyse_residuals(r, ctx.variables);
 
+    Learned learned;
+    const ReadingSet* data = &readings;  // the readings the fits see (learned terms taken off)
+    auto unknowns = [&] { return static_cast<double>(fit.fitted.size()) + static_cast<double>(learned.terms.size()); };
+    auto all_model_columns = [&] {
+        std::vector<Eigen::Index> cols = model_columns(ctx, fit);
+        cols.insert(cols.end(), learned.cols.begin(), learned.cols.end());
+        return cols;
+    };
+    // Refit with the learned terms held, then one joint step of the terms and a last refit.
+    auto refit_with_terms = [&](const std::vector<Param>& params, const ErrorParams& start) {
+        FitSummary f = fit_model(*data, params, start);
+        if (learned.terms.empty()) return f;
+        std::swap(fit, f);
+        const double moved = rebalance(ctx, fit, residuals_of(*data, fit), learned);
+        std::swap(fit, f);
+        if (moved > 0.05) {  // the terms moved by more than 5 % of their uncertainty: refit the rest
+            apply_terms(readings, learned);
+            f = fit_model(*data, params, f.model);
+        }
+        return f;
+    };
+
+    // The noise floor (repeated points: from the base fit's residuals) and the search beyond the library.
+    out.noise_floor = estimate_noise_floor(readings, r, options.noise_mm);
+    const std::vector<EmpiricalFamily> families = empirical_families(readings);
+    std::optional<TermBasis> basis;
+    auto search_now = [&] {
+        if (!basis) basis = term_basis(readings, out.base_fit, base_offsets);
+        const std::vector<Eigen::Index> mcols = all_model_columns();
+        Eigen::MatrixXd mjac(n, static_cast<Eigen::Index>(mcols.size()));
+        Eigen::MatrixXd mgram(mjac.cols(), mjac.cols());
+        for (std::size_t i = 0; i < mcols.size(); ++i) {
+            mjac.col(static_cast<Eigen::Index>(i)) = ctx.jac.col(mcols[i]);
+            for (std::size_t j = 0; j < mcols.size(); ++j)
+                mgram(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = ctx.gram(mcols[i], mcols[j]);
+        }
+        const double alpha_s = out.noise_floor.known() ? options.search_alpha : options.search_alpha_unknown_floor;
+        detail::SearchInput in{
+            readings, mjac, mgram, r, *basis, families, learned.terms, alpha_s, options.min_independence};
+        return detail::search_beyond_library(in);
+    };
+    std::optional<detail::SearchOutput> pending;  // a search that beat the library's best step
+
     std::vector<const Effect*> open = candidates;  // still to test
     double alpha = options.family_alpha;
-    for (int step = 0; step < options.max_steps && !open.empty(); ++step) {
-        const Projection proj(ctx.gram, model_columns(ctx, fit));
-        const double rss = r.squaredNorm();
-        const StepScores sc = score_candidates(ctx, proj, r, open, out);
-        if (sc.scores.empty() || sc.sigma2 <= 0) break;
-        alpha = options.family_alpha / static_cast<double>(sc.scores.size());
-        report_confounded_groups(sc, options, out);
-        const std::vector<std::size_t> chosen = best_subset(sc, options, f_critical(alpha, sc.dof));
-        if (chosen.empty()) break;
-        // The most visible member of the best explanation goes first.
-        std::size_t first = chosen.front();
-        for (std::size_t i : chosen)
-            if (sc.scores[i].f > sc.scores[first].f) first = i;
-        const Effect* winner = sc.scores[first].effect;
-        open.erase(std::find(open.begin(), open.end(), winner));
+    auto library_steps = [&] {
+        for (int step = static_cast<int>(out.steps.size()); step < options.max_steps && !open.empty(); ++step) {
+            std::vector<Eigen::Index> mcols = all_model_columns();
+            const Projection proj(ctx.gram, mcols);
+            const double rss = r.squaredNorm();
+            StepScores sc = score_candidates(ctx, proj, r, open, out);
+            if (sc.scores.empty() || sc.sigma2 <= 0) break;
+            alpha = options.family_alpha / static_cast<double>(sc.scores.size());
+            report_confounded_groups(sc, options, out);
+            double cost = 0;
+            const std::vector<std::size_t> chosen = best_subset(sc, options, f_critical(alpha, 1.0, sc.dof), &cost);
+            if (chosen.empty()) break;
+            // With a known floor and structure above it, a family beyond the library may explain more:
+            // the larger of the two scores (ΔRSS/σ² − thresholds) goes first.
+            // (No search when the library's explanation already takes 90 % of the excess over the floor:
+            // no family could beat it.)
+            const double lambda = f_critical(alpha, 1.0, sc.dof);
+            const double explained = (lambda * static_cast<double>(chosen.size()) - cost) * sc.sigma2;
+            const double excess =
+                rss - (static_cast<double>(n) - unknowns()) * out.noise_floor.sigma_mm * out.noise_floor.sigma_mm;
+            if (out.noise_floor.known() && static_cast<int>(out.learned.size()) < options.max_learned &&
+                explained < 0.9 * excess &&
+                noise_verdict(r, unknowns(), out.noise_floor, options.noise_alpha).structure) {
+                // Both scored against the floor; the library is preferred unless the family explains
+                // clearly more (its score 20 % above the library's).
+                detail::SearchOutput found = search_now();
+                const double s2 = out.noise_floor.sigma_mm * out.noise_floor.sigma_mm;
+                const double lib_score = explained / s2 - lambda * static_cast<double>(chosen.size());
+                if (found.found && found.delta_rss_mm2 / s2 - found.penalty > 1.2 * lib_score) {
+                    pending = std::move(found);
+                    break;
+                }
+            }
+            // The most visible member of the best explanation goes first.
+            std::size_t first = chosen.front();
+            for (std::size_t i : chosen)
+                if (sc.scores[i].f > sc.scores[first].f) first = i;
+            const Effect* winner = sc.scores[first].effect;
+            open.erase(std::find(open.begin(), open.end(), winner));
 
-        // Refit with the winner.
-        std::vector<Param> extended = model;
-        extended.push_back(winner->param);
-        FitSummary refit = fit_model(readings, extended, fit.model);
-        const ParamEstimate* est = refit.find(param_info(winner->param).name);
-        if (!est || !est->observable) {
-            out.unidentifiable.push_back(std::string(winner->id));
-            continue;
+            // Refit with the winner.
+            std::vector<Param> extended = model;
+            extended.push_back(winner->param);
+            FitSummary refit = refit_with_terms(extended, fit.model);
+            const ParamEstimate* est = refit.find(param_info(winner->param).name);
+            if (!est || !est->observable) {
+                out.unidentifiable.push_back(std::string(winner->id));
+                continue;
+            }
+            const Eigen::VectorXd r_new = residuals_of(*data, refit);
+            const double rss_new = r_new.squaredNorm();
+            const double dof_new =
+                static_cast<double>(refit.degrees_of_freedom) - static_cast<double>(learned.terms.size());
+            DiscoveryStep st;
+            st.effect = winner;
+            st.estimate = st.estimate_when_added = est->estimate;
+            st.std_error = est->std;
+            st.rms_before_mm = std::sqrt(rss / static_cast<double>(n));
+            st.rms_after_mm = std::sqrt(rss_new / static_cast<double>(n));
+            st.criterion = "F";
+            st.value = (rss - rss_new) / std::max(rss_new / std::max(dof_new, 1.0), 1e-300);
+            st.p_value = f_distribution_sf(st.value, 1.0, std::max(dof_new, 1.0));
+            st.explained_by = best_variable(r - r_new, ctx.variables);
+            st.trend_before = residual_trend(r, ctx.variables, st.explained_by);
+            st.trend_after = residual_trend(r_new, ctx.variables, st.explained_by);
+            st.model_after = refit.model;
+            st.candidates = sc.scores;
+            std::sort(st.candidates.begin(), st.candidates.end(),
+                      [](const auto& a, const auto& b) { return a.f > b.f; });
+            out.steps.push_back(std::move(st));
+            model = std::move(extended);
+            fit = std::move(refit);
+            r = r_new;
         }
-        const Eigen::VectorXd r_new = residuals_of(readings, refit);
-        const double rss_new = r_new.squaredNorm();
-        const double dof_new = static_cast<double>(refit.degrees_of_freedom);
-        DiscoveryStep st;
-        st.effect = winner;
-        st.estimate = st.estimate_when_added = est->estimate;
-        st.std_error = est->std;
-        st.rms_before_mm = std::sqrt(rss / static_cast<double>(n));
-        st.rms_after_mm = std::sqrt(rss_new / static_cast<double>(n));
-        st.criterion = "F";
-        st.value = (rss - rss_new) / std::max(rss_new / std::max(dof_new, 1.0), 1e-300);
-        st.p_value = f_distribution_sf(st.value, 1.0, dof_new);
-        st.explained_by = best_variable(r - r_new, ctx.variables);
-        st.trend_before = residual_trend(r, ctx.variables, st.explained_by);
-        st.trend_after = residual_trend(r_new, ctx.variables, st.explained_by);
-        st.model_after = refit.model;
-        st.candidates = sc.scores;
-        std::sort(st.candidates.begin(), st.candidates.end(), [](const auto& a, const auto& b) { return a.f > b.f; });
-        out.steps.push_back(std::move(st));
-        model = std::move(extended);
+    };
+    library_steps();
+    // A library effect added while unexplained structure inflated the residual may owe its place to
+    // that structure: once a term explains it, each is tested again given the rest of the model.
+    auto withdraw_insignificant = [&] {
+        for (;;) {
+            DiscoveryStep* weakest = nullptr;
+            double weakest_f = 0;
+            int active = 0;
+            for (DiscoveryStep& st : out.steps) {
+                if (st.withdrawn) continue;
+                ++active;
+                const ParamEstimate* e = fit.find(param_info(st.effect->param).name);
+                if (!e || !e->observable || !(e->std > 0)) continue;
+                const double f = (e->estimate / e->std) * (e->estimate / e->std);
+                if (!weakest || f < weakest_f) {
+                    weakest = &st;
+                    weakest_f = f;
+                }
+            }
+            if (!weakest) return;
+            const double dof =
+                std::max(static_cast<double>(fit.degrees_of_freedom) - static_cast<double>(learned.terms.size()), 1.0);
+            if (f_distribution_sf(weakest_f, 1.0, dof) <= options.family_alpha / active) return;
+            weakest->withdrawn = true;
+            model.erase(std::find(model.begin(), model.end(), weakest->effect->param));
+            ErrorParams start = fit.model;
+            start[weakest->effect->param] = 0;
+            fit = refit_with_terms(model, start);
+            r = residuals_of(*data, fit);
+        }
+    };
+
+    // 3. The verdict; beyond the library while the residual is structure.
+    out.verdict_library = noise_verdict(r, unknowns(), out.noise_floor, options.noise_alpha);
+    out.verdict = out.verdict_library;
+    for (int round = 0; round < options.max_learned; ++round) {
+        if (out.noise_floor.known() && !out.verdict.structure && !pending) break;
+        detail::SearchOutput found = pending ? std::move(*pending) : search_now();
+        pending.reset();
+        for (const std::string& s : found.not_searchable)
+            if (std::find(out.not_searchable.begin(), out.not_searchable.end(), s) == out.not_searchable.end())
+                out.not_searchable.push_back(s);
+        if (!found.found) {
+            if (out.verdict.structure)
+                out.unlocated =
+                    "the residual is above the noise floor, and no family of the search (each rotary angle, each "
+                    "linear axis, time, temperatures, bar direction) explains it at the criterion";
+            break;
+        }
+        EmpiricalStep st = std::move(found.step);
+        st.rms_before_mm = std::sqrt(r.squaredNorm() / static_cast<double>(n));
+        for (const LearnedTerm& t : st.terms) learned.terms.push_back(t);
+        append_columns(ctx, found.columns, learned);
+        apply_terms(readings, learned);
+        data = &learned.corrected;
+        FitSummary refit = refit_with_terms(model, fit.model);
+        const Eigen::VectorXd r_new = residuals_of(*data, refit);
+        st.rms_after_mm = std::sqrt(r_new.squaredNorm() / static_cast<double>(n));
+        // The main term (largest contribution) gives the trend's quantity.
+        std::size_t main = 0;
+        for (std::size_t k = 0; k < st.terms.size(); ++k)
+            if (std::abs(st.terms[k].value) * found.columns[k].norm() >
+                std::abs(st.terms[main].value) * found.columns[main].norm())
+                main = k;
+        st.trend_before = detail::term_trend(readings, *basis, st.terms[main].term, r, &st.trend_unit, &st.trend_label);
+        st.trend_after =
+            detail::term_trend(readings, *basis, st.terms[main].term, r_new, &st.trend_unit, &st.trend_label);
+        st.trend_before.variable = st.trend_after.variable = ExplainingVariable::bar_direction;
         fit = std::move(refit);
         r = r_new;
+        out.learned.push_back(std::move(st));
+        library_steps();
+        withdraw_insignificant();
+        out.verdict = noise_verdict(r, unknowns(), out.noise_floor, options.noise_alpha);
+    }
+    // The learned terms' final values and uncertainties (joint with the final model).
+    if (!learned.terms.empty()) {
+        if (rebalance(ctx, fit, r, learned) > 0.05) {
+            apply_terms(readings, learned);
+            fit = fit_model(*data, model, fit.model);
+            r = residuals_of(*data, fit);
+            rebalance(ctx, fit, r, learned);  // uncertainties at the solution; the step is below tolerance
+        }
+        out.verdict = noise_verdict(r, unknowns(), out.noise_floor, options.noise_alpha);
+        std::size_t k = 0;
+        for (EmpiricalStep& st : out.learned) {
+            for (LearnedTerm& t : st.terms) t = learned.terms[k++];
+            st.description = detail::describe(st.family, st.terms);
+        }
+        out.learned_terms = learned.terms;
     }
 
     // Steps report the final model's estimates (an effect added early is re-estimated as later ones
     // join it).
     for (DiscoveryStep& st : out.steps)
-        if (const ParamEstimate* e = fit.find(param_info(st.effect->param).name); e && e->observable) {
+        if (const ParamEstimate* e = fit.find(param_info(st.effect->param).name); !st.withdrawn && e && e->observable) {
             st.estimate = e->estimate;
             st.std_error = e->std;
         }
     out.final_model = model;
-    out.rms_final_mm = fit.residual_rms_mm;
+    out.rms_final_mm = std::sqrt(r.squaredNorm() / static_cast<double>(n));
     out.final_residuals = analyse_residuals(r, ctx.variables);
-    char text[200];
+    char text[300];
     std::snprintf(text, sizeof text,
                   "F-test per added parameter at a family-wise false-alarm rate of %g per step (Bonferroni), "
-                  "sparsest explanation of up to %d effects",
-                  options.family_alpha, options.max_subset);
+                  "sparsest explanation of up to %d effects; noise verdict chi-square against the noise floor at "
+                  "p < %g; beyond the library nested F-tests at %g (Bonferroni over the groups of terms)",
+                  options.family_alpha, options.max_subset, options.noise_alpha,
+                  out.noise_floor.known() ? options.search_alpha : options.search_alpha_unknown_floor);
     out.criterion_text = text;
     out.final_fit = std::move(fit);
     out.variables = std::move(ctx.variables);

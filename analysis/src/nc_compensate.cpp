@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <memory>
+#include <utility>
 
 namespace ballbar::analysis {
 namespace {
@@ -38,7 +39,9 @@ inline Vec3 rz(double a, const Vec3& v) {
 /// One Compensator per tool vector (the tool point seen from the model's commanded point).
 class Compensators {
   public:
-    Compensators(const MachineGeometry& g, const ErrorParams& e, const CompensationOptions& o) : g_(g), e_(e), o_(o) {}
+    Compensators(const MachineGeometry& g, const ErrorParams& e, std::vector<LearnedTerm> terms,
+                 const CompensationOptions& o)
+        : g_(g), e_(e), terms_(std::move(terms)), o_(o) {}
     const Compensator& get(const Vec3& tool) {
         if (current_ && tool == current_tool_) return *current_;
         for (auto& [t, c] : cache_)
@@ -49,7 +52,7 @@ class Compensators {
             }
         MachineGeometry g = g_;
         g.tool_ball_mm = tool;
-        cache_.emplace_back(tool, std::make_unique<Compensator>(g, e_, o_));
+        cache_.emplace_back(tool, std::make_unique<Compensator>(g, e_, terms_, o_));
         current_tool_ = tool;
         current_ = cache_.back().second.get();
         return *current_;
@@ -58,6 +61,7 @@ class Compensators {
   private:
     MachineGeometry g_;
     ErrorParams e_;
+    std::vector<LearnedTerm> terms_;
     CompensationOptions o_;
     std::vector<std::pair<Vec3, std::unique_ptr<Compensator>>> cache_;
     const Compensator* current_ = nullptr;
@@ -90,7 +94,7 @@ NcCompensateSummary compensate_nc_program(std::string_view text, const MachineGe
     NcInterpreter in(text, iopt);
     CompensationOptions co = o.solver;
     co.max_rotary_step_rad = o.max_rotary_rad;
-    Compensators comps(geom, e, co);
+    Compensators comps(geom, e, o.empirical, co);
     const double sign = iopt.iso_directions ? -1.0 : 1.0;  // ballbar → program direction
     const double lm = iopt.offsets.measured_tool_length_mm;
     const int dec = o.decimals;

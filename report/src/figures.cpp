@@ -103,7 +103,9 @@ void figure_discovery(Document& doc, const std::vector<DiscoveryStep>& steps) {
         for (std::size_t j = i; j < std::min(i + 2, steps.size()); ++j) {
             const auto& s = steps[j];
             Plot p("Step " + std::to_string(j + 1) + ": " + s.effect);
-            p.x_axis(s.variable, s.variable_unit).y_axis("residual", "µm").include_zero_y();
+            p.x_axis(s.variable, s.variable_unit)
+                .y_axis(s.y_label.empty() ? "residual" : s.y_label, s.y_unit.empty() ? "µm" : s.y_unit)
+                .include_zero_y();
             if (s.binned) {  // binned means: of this step's residuals, or the workflow's first and last
                 p.line(s.own_step ? "before the step (bin means)" : "before discovery (bin means)", s.x, s.before_um,
                        kGrey, 0.8);

@@ -158,6 +158,7 @@ void model_section(Document& doc, const IdentifiedModel& m) {
 
 void discovery_section(Document& doc, const Report& r) {
     doc.heading("Discovery steps", 200);
+    for (const std::string& note : r.discovery_notes) doc.paragraph(note);
     std::vector<std::vector<std::string>> rows;
     for (std::size_t i = 0; i < r.discovery.size(); ++i) {
         const auto& s = r.discovery[i];

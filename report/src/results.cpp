@@ -230,8 +230,16 @@ void add_discovery(Report& r, std::string_view kind, const json& p) {
                 const json& t = (*step_trends)[step_index];
                 std::vector<double> x = nums(kind, t, "bin_centre");
                 std::vector<double> before = nums(kind, t, "before_um"), after = nums(kind, t, "after_um");
+                const bool own_units = find(t, "x_unit") != nullptr;  // a learned term: display units already
+                if (own_units) {
+                    d.variable = opt_str(kind, t, "variable");
+                    d.variable_unit = opt_str(kind, t, "x_unit");
+                    d.y_label = opt_str(kind, t, "y_label");
+                    d.y_unit = opt_str(kind, t, "y_unit");
+                }
                 if (!x.empty() && before.size() == x.size() && after.size() == x.size()) {
-                    for (double& xv : x) xv *= vi.factor;
+                    if (!own_units)
+                        for (double& xv : x) xv *= vi.factor;
                     d.x = std::move(x);
                     d.before_um = std::move(before);
                     d.after_um = std::move(after);
@@ -260,6 +268,8 @@ void add_discovery(Report& r, std::string_view kind, const json& p) {
         else if (!find(s, "x"))
             d.accepted = true;  // the workflow lists the effects it added
         d.note = opt_str(kind, s, "note");
+        if (d.note.empty()) d.note = opt_str(kind, s, "where");
+        if (opt_str(kind, s, "kind") == "empirical") d.effect += " (learned)";
         if (d.note.empty() && find(s, "estimate")) {
             const auto [factor, unit] = display_unit(opt_str(kind, s, "unit"));
             char buf[96];
@@ -269,6 +279,34 @@ void add_discovery(Report& r, std::string_view kind, const json& p) {
         }
         r.discovery.push_back(d);
     }
+    // The noise floor and the verdicts (`ballbar discover` since the search beyond the library).
+    if (const json* f = find(p, "noise_floor_um"); f && f->is_number()) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "Noise floor %.3f µm (%s).", f->get<double>(),
+                      opt_str(kind, p, "noise_source").c_str());
+        r.discovery_notes.emplace_back(buf);
+    } else if (find(p, "noise_source")) {
+        r.discovery_notes.emplace_back("Noise floor unknown: whether the residual is noise cannot be decided.");
+    }
+    for (const char* key : {"verdict_before_search", "verdict"}) {
+        const json* v = find(p, key);
+        if (!v || !v->is_object()) continue;
+        char buf[240];
+        if (const auto ratio = opt_num(kind, *v, "ratio"))
+            std::snprintf(buf, sizeof buf,
+                          "%s: residual RMS %.3f µm = %.2f× the floor: %s (χ² %.1f on %.0f dof, p = %.3g).",
+                          std::string_view(key) == "verdict" ? "Final" : "Before the search beyond the library",
+                          opt_num(kind, *v, "rms_um").value_or(0), *ratio, opt_str(kind, *v, "result").c_str(),
+                          opt_num(kind, *v, "chi2").value_or(0), opt_num(kind, *v, "dof").value_or(0),
+                          opt_num(kind, *v, "p_value").value_or(1));
+        else
+            std::snprintf(buf, sizeof buf, "%s: residual RMS %.3f µm (%s).",
+                          std::string_view(key) == "verdict" ? "Final" : "Before the search beyond the library",
+                          opt_num(kind, *v, "rms_um").value_or(0), opt_str(kind, *v, "result").c_str());
+        r.discovery_notes.emplace_back(buf);
+    }
+    if (const std::string u = opt_str(kind, p, "unlocated"); !u.empty())
+        r.discovery_notes.push_back("Unexplained structure not located: " + u + ".");
 }
 
 void add_compensation(Report& r, std::string_view kind, const json& p) {

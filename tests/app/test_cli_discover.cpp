@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 
+#include "../analysis/independent_readings.hpp"
 #include "cli_harness.hpp"
 
 using nlohmann::json;
@@ -37,7 +38,8 @@ TEST(CliDiscover, NamesTheHiddenEffectInAThirdPartyFile) {
     ASSERT_NO_THROW(j = json::parse(r.out)) << r.out;
     for (const char* key : {"base_model", "rms_initial_um", "steps", "rms_final_um", "confounded", "unidentifiable"})
         EXPECT_TRUE(j.contains(key)) << key;
-    EXPECT_EQ(j.size(), 6u) << "exactly the issue's keys";
+    for (const char* key : {"noise_floor_um", "noise_source", "verdict", "verdict_before_search"})
+        EXPECT_TRUE(j.contains(key)) << key;
     EXPECT_EQ(j["base_model"].front(), "Y0A");
     ASSERT_EQ(j["steps"].size(), 1u) << r.out;
     const json& st = j["steps"][0];
@@ -122,6 +124,43 @@ TEST(CliDiscover, StoresResultAndModelHistoryWithTheSession) {
     for (const auto& v : disc[0]["before_um"]) before = std::max(before, std::abs(v.get<double>()));
     for (const auto& v : disc[0]["after_um"]) after = std::max(after, std::abs(v.get<double>()));
     EXPECT_GT(before, 3 * after) << "the growth's trend is gone after the step";
+}
+
+TEST(CliDiscover, StructureOutsideTheLibraryIsFoundNeverCalledNoise) {
+    // The case: a TTTRR whose C axis has a once-per-revolution angular error of 80 µrad,
+    // 0.3 µm of noise given as n/std_mm, written by the independent generator.
+    TempDir dir;
+    indep::Scenario sc = indep::make_scenario("TTTRR", "angular", false, 5);
+    sc.m.angular_amp_rad = 80e-6;
+    sc.m.angular_phase_rad = 40 * indep::kDeg;
+    std::mt19937_64 rng(5);
+    const std::string file = dir.file("c_axis.csv");
+    std::ofstream(file) << indep::generate(sc.m, rng).text();
+    const CliRun r = run(dir, "discover --json '" + file + "'");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json j = json::parse(r.out);
+    EXPECT_NEAR(j["noise_floor_um"].get<double>(), 0.3, 0.03);
+    EXPECT_EQ(j["noise_source"], "within-point spread");
+    EXPECT_EQ(j["verdict_before_search"]["result"], "unexplained structure");
+    EXPECT_EQ(j["verdict_before_search"]["statistic"], "chi-square");
+    EXPECT_EQ(j["verdict"]["result"], "consistent with noise");
+    ASSERT_FALSE(j["steps"].empty()) << r.out;
+    const json& st = j["steps"].back();
+    EXPECT_EQ(st["kind"], "empirical");
+    EXPECT_EQ(st["effect"], "C_angular");
+    EXPECT_EQ(st["explained_by"], "C");
+    EXPECT_NE(st["where"].get<std::string>().find("once per revolution"), std::string::npos) << st["where"];
+    EXPECT_TRUE(st["terms"].contains("C_angular_h1_cos"));
+    EXPECT_LE(j["rms_final_um"].get<double>(), 1.5 * j["noise_floor_um"].get<double>());
+
+    // A floor the residual cannot reach: the verdict stays structure, and the table never says noise.
+    const CliRun low = run(dir, "discover --noise-um 0.1 '" + file + "'");
+    ASSERT_EQ(low.code, 0) << low.err;
+    EXPECT_NE(low.out.find("UNEXPLAINED STRUCTURE"), std::string::npos) << low.out;
+    EXPECT_EQ(low.out.find("final: residual RMS 0.2"), low.out.find("final: residual RMS 0.2")) << low.out;
+    EXPECT_EQ(low.out.find("is noise"), std::string::npos) << low.out;
+    const CliRun bad = run(dir, "discover --noise-um -1 '" + file + "'");
+    EXPECT_EQ(bad.code, 2) << bad.out;
 }
 
 }  // namespace

@@ -16,7 +16,10 @@
 #pragma once
 
 #include <array>
+#include <span>
+#include <vector>
 
+#include "ballbar/analysis/empirical.hpp"
 #include "ballbar/analysis/error_params.hpp"
 #include "ballbar/analysis/types.hpp"
 
@@ -33,6 +36,11 @@ struct ToolPose {
 class MachineModel {
   public:
     MachineModel(const MachineGeometry& geom, const ErrorParams& e);
+    /// With learned empirical terms (empirical.hpp): a rotary axis turns by commanded + zero offset +
+    /// ε(commanded), ε its angular error table (rotary pitch-error compensation); a linear axis moves
+    /// to commanded + δ(commanded). Terms that depend on time, temperature or the approach direction
+    /// are not part of a static model and are ignored.
+    MachineModel(const MachineGeometry& geom, const ErrorParams& e, std::span<const LearnedTerm> terms);
 
     ToolPose tool_pose(const Pose& pose) const;
     const MachineGeometry& geometry() const { return geom_; }
@@ -45,6 +53,7 @@ class MachineModel {
     ToolPose tool_pose(const Pose& pose, const Trig& t) const;
 
   private:
+    ToolPose static_pose(const Pose& pose, const Trig& t) const;  // without the learned terms
     struct Axis {  // rotation about a fixed line: x ↦ point + R(θ + zero)(x − point)
         Vec3 point = Vec3::Zero();
         Vec3 dir = Vec3::UnitZ();
@@ -55,7 +64,8 @@ class MachineModel {
     };
     MachineGeometry geom_;
     ErrorParams e_;
-    Axis first_, second_;  // the type's rotary axes, in the order of rotary_axes(type)
+    Axis first_, second_;             // the type's rotary axes, in the order of rotary_axes(type)
+    std::vector<LearnedTerm> terms_;  // the static empirical terms (angular, positioning)
     Vec3 tool_mm_ = Vec3::Zero();
     Vec3 chain_ = Vec3::Zero();  // TTTRR: qc − qa
     Vec3 base_ = Vec3::Zero();   // TTTRR: a_pivot + c_offset − qc; RTTTR: a_pivot − qa
@@ -92,6 +102,9 @@ struct Correction {
 class Compensator {
   public:
     Compensator(const MachineGeometry& geom, const ErrorParams& e, CompensationOptions options = {});
+    /// The actual machine with learned empirical terms too (MachineModel).
+    Compensator(const MachineGeometry& geom, const ErrorParams& e, std::span<const LearnedTerm> terms,
+                CompensationOptions options = {});
 
     /// First-order correction (one model evaluation, nominal Jacobian). Errors are not evaluated
     /// after the correction (position_error_mm, direction_error_rad = 0) to keep it cheap.

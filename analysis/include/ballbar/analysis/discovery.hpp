@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ballbar/analysis/effects.hpp"
+#include "ballbar/analysis/empirical.hpp"
 #include "ballbar/analysis/identify.hpp"
 #include "ballbar/analysis/reading.hpp"
 
@@ -38,6 +39,18 @@ struct DiscoveryOptions {
     int max_steps = 12;
     /// Largest number of effects one explanation (subset search) may hold.
     int max_subset = 3;
+
+    /// The measurement noise of one reading (mm), when the user knows it; otherwise it is estimated
+    /// from the readings (estimate_noise_floor).
+    std::optional<double> noise_mm;
+    /// The residual is unexplained structure when P(χ² ≥ observed) under the noise floor is below this.
+    double noise_alpha = 0.001;
+    /// Family-wise false-alarm rate of one search beyond the library (Bonferroni over its groups of
+    /// terms); with an unknown noise floor `search_alpha_unknown_floor` applies instead.
+    double search_alpha = 0.01;
+    double search_alpha_unknown_floor = 0.001;
+    /// Largest number of empirical families learned.
+    int max_learned = 3;
 };
 
 /// Per-reading variables residuals are analysed against. Columns: time_s, bar_temp_C, X_mm, Y_mm,
@@ -65,6 +78,58 @@ ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eig
 VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables,
                              ExplainingVariable v);
 
+/// The measurement noise of one reading, and where it comes from.
+struct NoiseFloor {
+    double sigma_mm = 0;  ///< 0: unknown
+    std::string source;   ///< "given", "within-point spread", "repeated points", "unknown"
+    std::string detail;   ///< e.g. "252 readings, n = 40 samples each"
+    bool known() const { return sigma_mm > 0; }
+};
+
+/// The floor from (in this order) the user's figure, the readings' own within-point spread
+/// (σ² = mean of std_mm²/n over the readings that give it, at least half of them), or the spread of
+/// the residuals `residual_mm` of repeated points (same socket and pose; at least 10 degrees of freedom).
+NoiseFloor estimate_noise_floor(const ReadingSet& readings, const Eigen::VectorXd& residual_mm,
+                                std::optional<double> user_mm);
+
+/// Is the residual consistent with the noise floor? χ² = Σr²/σ², dof = readings − fitted unknowns,
+/// p = P(χ²(dof) ≥ χ²); unexplained structure when p < alpha.
+struct NoiseVerdict {
+    bool floor_known = false;
+    double rms_mm = 0, ratio = 0;  ///< RMS and RMS / floor
+    double chi2 = 0, dof = 0, p_value = 1, alpha = 0.001;
+    bool structure = false;  ///< true: unexplained structure (never reported as noise)
+    std::string text;        ///< "consistent with noise", "unexplained structure", "noise floor unknown"
+};
+NoiseVerdict noise_verdict(const Eigen::VectorXd& residual_mm, double fitted_unknowns, const NoiseFloor& floor,
+                           double alpha);
+
+/// One family's result in a search beyond the library.
+struct FamilyScore {
+    std::string family, variable;
+    std::vector<std::string> terms;  ///< the terms its forward selection kept
+    double delta_rss_mm2 = 0;        ///< drop of the residual sum of squares with them
+    double f = 0, p_value = 1;       ///< nested-model F-test of them against the model: (dof1, dof2)
+    double dof1 = 0, dof2 = 0;
+    double score = 0;  ///< ΔRSS/σ² − Σ thresholds: positive when it beats the model
+    bool passes = false;
+};
+
+/// A term learned beyond the library: where the structure lives and what it is.
+struct EmpiricalStep {
+    std::string family;              ///< "C_angular"
+    std::string variable;            ///< "C"
+    std::string description;         ///< "the C axis: once per revolution, 78 µrad, phase 40°"
+    std::vector<LearnedTerm> terms;  ///< as the final model has them
+    double rms_before_mm = 0, rms_after_mm = 0;
+    double f = 0, p_value = 1, dof1 = 0, dof2 = 0, threshold_p = 0;
+    /// The residual seen as the term's own quantity (an angle error, a positioning error, …) in bins of
+    /// its variable, before and after the step; `trend_unit` is that quantity's unit.
+    VariableTrend trend_before, trend_after;
+    std::string trend_unit, trend_label;
+    std::vector<FamilyScore> families;  ///< every family of the search, best first
+};
+
 /// One candidate's score in one step.
 struct CandidateScore {
     const Effect* effect = nullptr;
@@ -89,6 +154,9 @@ struct DiscoveryStep {
     VariableTrend trend_before, trend_after;
     std::vector<CandidateScore> candidates;  ///< every candidate of the step, best first
     ErrorParams model_after{};               ///< the model's parameters after the step's refit
+    /// Taken out again: once a learned term explained the structure, its F-test given the rest of the
+    /// model no longer passed (Bonferroni over the library effects in the model).
+    bool withdrawn = false;
 };
 
 struct DiscoveryResult {
@@ -107,6 +175,16 @@ struct DiscoveryResult {
     FitSummary final_fit;
     ResidualAnalysis initial_residuals, final_residuals;
     Eigen::MatrixXd variables;  ///< explaining_variables() of the readings (rows as the residuals)
+
+    NoiseFloor noise_floor;
+    NoiseVerdict verdict_library;  ///< after the library steps, before any empirical term
+    NoiseVerdict verdict;          ///< of the final residual
+    std::vector<EmpiricalStep> learned;
+    std::vector<LearnedTerm> learned_terms;  ///< every learned term with its final value
+    /// Empirical terms the readings cannot tell from the model (not searched).
+    std::vector<std::string> not_searchable;
+    /// What the search concluded when the residual is above the floor and nothing located it.
+    std::string unlocated;
 };
 
 /// The workflow. Throws AnalysisError for readings it cannot fit (too few, inconsistent machine).
@@ -114,6 +192,10 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
 
 /// Upper tail of the F distribution, P(F(d1, d2) > f), through the regularized incomplete beta function.
 double f_distribution_sf(double f, double d1, double d2);
+/// Upper tail of the F distribution inverted: the f with P(F(d1, d2) > f) = alpha.
+double f_critical(double alpha, double d1, double d2);
+/// Upper tail of the χ² distribution, P(χ²(dof) > x), through the regularized incomplete gamma function.
+double chi_square_sf(double x, double dof);
 /// Regularized incomplete beta function I_x(a, b).
 double incomplete_beta(double a, double b, double x);
 

@@ -25,6 +25,9 @@ struct NcCompensateOptions {
     bool allow_truncated = false;  ///< a program without M2/M30/% is compensated as it is (no end added)
     int decimals = 4;              ///< digits after the point of the axis words (mm and degrees)
     std::string title;
+    /// Empirical terms learned by discovery (rotary angular error tables, positioning polynomials),
+    /// applied by the actual machine model with the error parameters (docs/discovery.md).
+    std::vector<LearnedTerm> empirical;
 };
 
 struct NcCompensateSummary {

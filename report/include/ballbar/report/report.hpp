@@ -128,6 +128,7 @@ struct DiscoveryStep {
     bool own_step = false;  ///< binned: of this step's residuals before and after it (else the whole
                             ///< workflow's first and last, as results stored before step trends were)
     std::string note;
+    std::string y_label, y_unit;  ///< the plotted quantity; empty: the residual in µm
 };
 
 /// Before/after of compensation for one axis (a bar per axis in the figure).
@@ -146,6 +147,7 @@ struct Report {
     std::vector<CaptureWindow> captures;
     std::optional<IdentifiedModel> model;
     std::vector<DiscoveryStep> discovery;
+    std::vector<std::string> discovery_notes;  ///< the noise floor and the verdicts on the residual
     std::vector<CompensationAxis> compensation;
     std::string compensation_metric;  ///< what the bars show, e.g. "max |error| over the check path"
 };
