@@ -34,19 +34,27 @@ using json = nlohmann::ordered_json;
 class GaugeDemoOperator : public acq::ScriptedOperator {
   public:
     GaugeDemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, gg::GaugeEmulator& emu)
-        : acq::ScriptedOperator(plan.spec.answers), plan_(plan), machine_(machine), emu_(emu) {}
+        : acq::ScriptedOperator(plan.spec.answers), machine_(machine), emu_(emu) {}
     bool confirm(std::string_view what, std::string_view prompt) override {
         if (what == "reference") emu_.set_in_calibrator(true);
         if (what == "setup") emu_.set_in_calibrator(false);
         return acq::ScriptedOperator::confirm(what, prompt);
     }
-    void run_program(std::size_t from_point) override {
-        machine_.stop(static_cast<double>(emu_.now_us()) * 1e-6);
-        machine_.run_program(acq::make_nc_program(plan_, from_point));
+    /// The machine runs the program it is given (a first run or a retry) from where it stands now.
+    void run_program(const ba::NcProgram& program, std::span<const std::size_t>, bool) override {
+        machine_.stop(now_s());
+        machine_.run_program(program);
+    }
+    /// At a program stop the emulated operator does what it says (moves the socket) and presses
+    /// cycle start; the rest runs once the machine stands at the stop.
+    void program_stop(const acq::ProgramStop& stop) override {
+        if (stop.socket_mm) machine_.set_socket_mm(*stop.socket_mm);
+        machine_.cycle_start(0);
     }
 
   private:
-    const acq::Plan& plan_;
+    double now_s() const { return static_cast<double>(emu_.now_us()) * 1e-6; }
+
     device::SimulatedMachine& machine_;
     gg::GaugeEmulator& emu_;
 };

@@ -24,6 +24,8 @@ class GaugeSource : public acquisition::SampleSource {
     acquisition::InstrumentStatus connect() override;
     void set_reference() override;
     void start() override {}
+    /// A gauge is polled: it reads only while read() asks it, so there is nothing to stop.
+    void stop() override {}
     acquisition::ReadStatus read(std::span<analysis::BarSample> out, std::size_t& n,
                                  std::chrono::milliseconds timeout) override;
     bool reconnect(std::chrono::milliseconds timeout) override;
