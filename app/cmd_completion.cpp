@@ -72,7 +72,8 @@ std::string bash_script(const CLI::App& root) {
         std::string pats;
         for (const CLI::Option* o : named_options(n.app)) {
             if (!takes_value(o)) continue;
-            for (const auto& name : option_names(o)) pats += (pats.empty() ? "" : "|") + std::string("'") + sq(n.path) + "|" + name + "'";
+            for (const auto& name : option_names(o))
+                pats += (pats.empty() ? "" : "|") + std::string("'") + sq(n.path) + "|" + name + "'";
         }
         if (!pats.empty()) s += "        " + pats + ") COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n";
     }
@@ -121,14 +122,16 @@ std::string zsh_script(const CLI::App& root) {
         std::string pats;
         for (const CLI::Option* o : named_options(n.app)) {
             if (!takes_value(o)) continue;
-            for (const auto& name : option_names(o)) pats += (pats.empty() ? "" : "|") + std::string("'") + sq(n.path) + "|" + name + "'";
+            for (const auto& name : option_names(o))
+                pats += (pats.empty() ? "" : "|") + std::string("'") + sq(n.path) + "|" + name + "'";
         }
         if (!pats.empty()) s += "        " + pats + ") _files; return ;;\n";
     }
     s += "    esac\n    case \"$path\" in\n";
     for (const auto& n : nodes) {
         s += "        '" + sq(n.path) + "')\n            subs=(";
-        for (const CLI::App* sub : visible_subcommands(n.app)) s += " " + zsh_entry(sub->get_name(), sub->get_description());
+        for (const CLI::App* sub : visible_subcommands(n.app))
+            s += " " + zsh_entry(sub->get_name(), sub->get_description());
         s += " )\n            opts=(";
         for (const CLI::Option* o : named_options(n.app))
             for (const auto& name : option_names(o)) s += " " + zsh_entry(name, o->get_description());
@@ -148,9 +151,11 @@ std::string zsh_script(const CLI::App& root) {
 }  // namespace
 
 BALLBAR_COMMAND(completion) {
-    auto* sub = root.add_subcommand("completion", "Print a shell completion script (bash, zsh) or the list of commands");
+    auto* sub =
+        root.add_subcommand("completion", "Print a shell completion script (bash, zsh) or the list of commands");
     auto shell = std::make_shared<std::string>();
-    sub->add_option("shell", *shell, "bash, zsh, or commands (each subcommand and its description, tab-separated, one a line)")
+    sub->add_option("shell", *shell,
+                    "bash, zsh, or commands (each subcommand and its description, tab-separated, one a line)")
         ->required()
         ->check(CLI::IsMember({"bash", "zsh", "commands"}));
     sub->footer(

@@ -47,10 +47,10 @@ TEST(CliHelp, BashCompletionIsValidAndKnowsEveryCommand) {
 
     // Ask the function itself, as bash would on <TAB>: `ballbar sol<TAB>` and `ballbar solve <TAB>`.
     const auto complete = [&](const std::string& words, int cword) {
-        std::ofstream(dir.path / "ask.sh") << "source '" << dir.file("ballbar.bash") << "'\nCOMP_WORDS=(" << words
-                                           << ")\nCOMP_CWORD=" << cword
-                                           << "\n_ballbar\nprintf '%s\\n' \"${COMPREPLY[@]}\"\n";
-        std::system(("bash '" + dir.file("ask.sh") + "' > '" + dir.file("reply") + "'").c_str());
+        std::ofstream(dir.path / "ask.sh")
+            << "source '" << dir.file("ballbar.bash") << "'\nCOMP_WORDS=(" << words << ")\nCOMP_CWORD=" << cword
+            << "\n_ballbar\nprintf '%s\\n' \"${COMPREPLY[@]}\"\n";
+        EXPECT_EQ(std::system(("bash '" + dir.file("ask.sh") + "' > '" + dir.file("reply") + "'").c_str()), 0);
         return slurp(dir.path / "reply");
     };
     EXPECT_EQ(complete("ballbar sol", 1), "solve\n");

@@ -83,9 +83,8 @@ TEST(CliSessions, KilledIsInterruptedFailedShowsWhyAndBothResume) {
     // 1. kill -9 while it waits for the instrument's first answer.
     const pid_t pid = ::fork();
     if (pid == 0) {
-        const std::string cmd =
-            std::string("exec '") + BALLBAR_EXE + "' --db '" + dir.file("test.db") + "' " + measure_args(mute, dir) +
-            " >/dev/null 2>&1";
+        const std::string cmd = std::string("exec '") + BALLBAR_EXE + "' --db '" + dir.file("test.db") + "' " +
+                                measure_args(mute, dir) + " >/dev/null 2>&1";
         ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
         ::_exit(127);
     }
@@ -113,8 +112,7 @@ TEST(CliSessions, KilledIsInterruptedFailedShowsWhyAndBothResume) {
     EXPECT_NE(r.code, 0);
     EXPECT_NE(r.out.find("Session 1 is interrupted: interrupted"), std::string::npos) << r.out;
     const CliRun shown = run(dir, "sessions show 1");
-    EXPECT_NE(shown.out.find("state       failed  (fail: cannot open the instrument"), std::string::npos)
-        << shown.out;
+    EXPECT_NE(shown.out.find("state       failed  (fail: cannot open the instrument"), std::string::npos) << shown.out;
     EXPECT_NE(shown.out.find("resume      ballbar measure --resume 1"), std::string::npos) << shown.out;
 
     // 3. the failed session resumes on a working instrument and completes; the reason comes first.
@@ -138,7 +136,7 @@ TEST(CliSessions, KilledIsInterruptedFailedShowsWhyAndBothResume) {
               std::string::npos)
         << text.out;
     EXPECT_NE(text.out.find("test 1 step 1 point 1"), std::string::npos) << "points numbered as measure does\n"
-                                                                        << text.out;
+                                                                         << text.out;
 }
 
 TEST(CliSessions, BarLengthMismatchStopsBeforeAnyQuestionAndNamesTheFix) {
