@@ -12,6 +12,10 @@ namespace {
 
 const std::map<std::string, std::string>& examples() {
     static const std::map<std::string, std::string> table{
+        {"circle",
+         "  ballbar circle plan --plane XY --radius 100 --feed 1000 --out circle.nc\n"
+         "  ballbar circle analyze trace.csv --json --tolerance 15\n"
+         "  ballbar circle analyze 4 --controller linuxcnc     # the measured backlash as INI settings\n"},
         {"compensate",
          "  ballbar compensate --model tttrr --program part.nc --out part-comp.nc\n"
          "  ballbar compensate --model model.json --program part.ngc --out - --exact > comp.ngc\n"},

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/acquisition/session.hpp"
 
+#include "ballbar/acquisition/bar_check.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -122,13 +124,12 @@ SessionSummary Session::run() {
 }
 
 void Session::check_instrument() {
-    // The bar length first: nothing is asked of the operator for a bar that cannot measure this plan.
-    if (std::abs(status_.calibrated_length_mm - plan_.spec.bar_length_mm) > plan_.spec.capture.tolerance_mm)
-        end(Event::Fail, "the plan's bar length " + fmt(plan_.spec.bar_length_mm, 3) +
-                             " mm differs from the instrument's calibrated length " +
-                             fmt(status_.calibrated_length_mm, 3) +
-                             " mm: set \"bar_length_mm\": " + fmt(status_.calibrated_length_mm, 3) +
-                             " in the plan, or fit the " + fmt(plan_.spec.bar_length_mm, 3) + " mm bar");
+    // The bar length first: nothing is asked of the operator for a bar that cannot measure this plan
+    // (the same check and message `measure` gives as soon as the instrument identifies).
+    if (const std::string mismatch = bar_length_mismatch(plan_.spec.bar_length_mm, status_.calibrated_length_mm,
+                                                         plan_.spec.capture.tolerance_mm);
+        !mismatch.empty())
+        end(Event::Fail, mismatch);
     if (status_.battery_pct < 5)
         end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
     check_stop();

@@ -315,7 +315,7 @@ TEST(Session, WrongBarLengthFailsBeforeTheOperatorIsAskedAnything) {
     Session session(plan, source, sink, op);
     const SessionSummary sum = session.run();
     EXPECT_EQ(sum.final_state, State::Failed);
-    EXPECT_NE(sum.reason.find("calibrated length"), std::string::npos) << sum.reason;
+    EXPECT_NE(sum.reason.find("calibrated at"), std::string::npos) << sum.reason;
     EXPECT_NE(sum.reason.find("\"bar_length_mm\": 100"), std::string::npos) << sum.reason;
     EXPECT_TRUE(op.asked.empty());
 }
@@ -449,7 +449,11 @@ TEST_P(SinglePointRetry, MeasuresExactlyThatPoint) {
 INSTANTIATE_TEST_SUITE_P(Types, SinglePointRetry,
                          ::testing::Combine(::testing::Values(MachineType::RRTTT, MachineType::TTTRR,
                                                               MachineType::RTTTR),
-                                            ::testing::Bool()));
+                                            ::testing::Bool()),
+                         [](const auto& p) {
+                             return std::string(analysis::to_string(std::get<0>(p.param))) +
+                                    (std::get<1>(p.param) ? "_LastPoint" : "_FirstPoint");
+                         });
 
 }  // namespace
 }  // namespace ballbar::acquisition

@@ -128,7 +128,11 @@ INSTANTIATE_TEST_SUITE_P(
         ::testing::Values("RRTTT", "TTTRR", "RTTTR"),
         ::testing::Values(
             R"({"disconnect_at_s": 30, "disconnect_s": 8})",
-            R"({"drop_frame_probability": 0.03, "corrupt_byte_probability": 0.0005, "replay_frame_probability": 0.02, "start_delay_s": 20, "feed_override": 0.5})")));
+            R"({"drop_frame_probability": 0.03, "corrupt_byte_probability": 0.0005, "replay_frame_probability": 0.02, "start_delay_s": 20, "feed_override": 0.5})")),
+    [](const auto& p) {
+        return std::string(std::get<0>(p.param)) +
+               (std::string(std::get<1>(p.param)).find("disconnect") != std::string::npos ? "_Disconnect" : "_NoisyLink");
+    });
 
 TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {
     const auto db = temp_db("human.db");
