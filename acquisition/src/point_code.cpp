@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/acquisition/point_code.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ballbar::acquisition {
@@ -58,6 +59,17 @@ std::optional<int> tag_digit(const PointCodeSpec& spec, int position, double off
     for (int d = 0; d < kLevels; ++d)
         if (std::abs(offset_mm - tag_offset_mm(spec, position, d)) <= spec.decision_mm) return d;
     return std::nullopt;
+}
+
+PointCodeSpec code_for_rate(double sample_rate_hz) {
+    PointCodeSpec c;
+    if (!(sample_rate_hz > 0)) return c;
+    const double period_s = 1.0 / sample_rate_hz;
+    c.tag_dwell_s = std::max(c.tag_dwell_s, 10 * period_s);
+    c.min_plateau_s = std::max(c.min_plateau_s, 0.5 * c.tag_dwell_s);
+    c.max_plateau_s = std::max(c.max_plateau_s, 3 * c.tag_dwell_s);
+    c.max_gap_s = std::max(c.max_gap_s, 2.5 * period_s);
+    return c;
 }
 
 }  // namespace ballbar::acquisition

@@ -1,12 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/acquisition/session.hpp"
 
-#include "ballbar/acquisition/bar_check.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
+#include "ballbar/acquisition/bar_check.hpp"
 #include "ballbar/acquisition/compute.hpp"
 
 namespace ballbar::acquisition {
@@ -140,6 +139,7 @@ void Session::check_instrument() {
     AttributionSettings as;
     as.point_count = plan_.points.size();
     as.sample_rate_hz = status_.sample_rate_hz;
+    as.code = code_for_rate(status_.sample_rate_hz);  // the programs below write the same code timing
     as.bar_length_mm = plan_.spec.bar_length_mm;
     as.plateau_std_mm = std::max(0.008, 4 * plan_.spec.capture.max_std_mm);
     as.dwell.window = std::max<std::size_t>(
@@ -317,6 +317,7 @@ void Session::program_stops(const ProgramEntry& entry) {
 
 Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, bool retry) {
     NcOptions nco;
+    if (attribution_settings_) nco.code = attribution_settings_->code;  // tags the attribution can see at this rate
     MeasuringProgram prog;
     try {
         prog = make_measuring_program(plan_, points, nco);

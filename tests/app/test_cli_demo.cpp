@@ -131,7 +131,8 @@ INSTANTIATE_TEST_SUITE_P(
             R"({"drop_frame_probability": 0.03, "corrupt_byte_probability": 0.0005, "replay_frame_probability": 0.02, "start_delay_s": 20, "feed_override": 0.5})")),
     [](const auto& p) {
         return std::string(std::get<0>(p.param)) +
-               (std::string(std::get<1>(p.param)).find("disconnect") != std::string::npos ? "_Disconnect" : "_NoisyLink");
+               (std::string(std::get<1>(p.param)).find("disconnect") != std::string::npos ? "_Disconnect"
+                                                                                          : "_NoisyLink");
     });
 
 TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {

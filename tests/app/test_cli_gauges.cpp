@@ -91,7 +91,8 @@ TEST_P(GaugeCli, DemoRecoversTheInjectedErrors) {
     EXPECT_NEAR(inst.at("resolution_mm").get<double>(), 1e-4, 1e-12);
 }
 
-INSTANTIATE_TEST_SUITE_P(Serial, GaugeCli, ::testing::Values("sylvac", "digimatic", "modbus"));
+INSTANTIATE_TEST_SUITE_P(Serial, GaugeCli, ::testing::Values("sylvac", "digimatic", "modbus"),
+                         [](const auto& p) { return std::string(p.param); });
 
 TEST(GaugeCliItn, DemoOnTheUsbItn) {
     ballbar::test::TempDir dir;

@@ -44,7 +44,8 @@ TEST(CliHelp, BashCompletionIsValidAndKnowsEveryCommand) {
     std::ofstream(dir.path / "ballbar.bash") << r.out;
     EXPECT_EQ(std::system(("bash -n '" + dir.file("ballbar.bash") + "'").c_str()), 0) << r.out;
     for (const auto& name : subcommands(dir))
-        EXPECT_TRUE(r.out.find(" " + name + " ") != std::string::npos || r.out.find("'" + name + " ") != std::string::npos ||
+        EXPECT_TRUE(r.out.find(" " + name + " ") != std::string::npos ||
+                    r.out.find("'" + name + " ") != std::string::npos ||
                     r.out.find(" " + name + "'") != std::string::npos)
             << name;
 

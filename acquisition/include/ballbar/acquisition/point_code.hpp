@@ -27,6 +27,12 @@ struct PointCodeSpec {
     double max_gap_s = 0.1;       ///< a gap in the stream longer than this voids the code being read
 };
 
+/// The code's timing for an instrument of `sample_rate_hz`: at 1 kHz the defaults above; a slow
+/// digital gauge (10–50 readings/s) gets tag dwells long enough for the plateau detector to see each
+/// tag with several readings (at least 10 reading periods), plateau bounds scaled with them, and a
+/// stream gap counted only beyond 2.5 reading periods (a polled gauge's readings come 1/rate apart).
+PointCodeSpec code_for_rate(double sample_rate_hz);
+
 /// Data digits for a plan of `point_count` points (at least 2).
 int code_data_digits(std::size_t point_count);
 /// The tag digits of point `index` (data digits, most significant first, then the check digit).
