@@ -33,7 +33,9 @@ std::uint16_t crc_bitwise(const Bytes& data) {
     std::uint16_t crc = 0xFFFF;
     for (const std::uint8_t b : data) {
         crc ^= static_cast<std::uint16_t>(b << 8);
-        for (int i = 0; i < 8; ++i) crc = (crc & 0x8000) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021) : crc << 1;
+        for (int i = 0; i < 8; ++i)
+            crc =
+                (crc & 0x8000) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021) : static_cast<std::uint16_t>(crc << 1);
     }
     return crc;
 }
