@@ -158,6 +158,9 @@ void Session::check_instrument() {
     fire(Event::CheckPassed, detail);
 }
 
+/// How often a start or a reference that failed is tried again after getting the link back.
+constexpr int kLinkRetries = 3;
+
 void Session::reference() {
     for (;;) {
         check_stop();
@@ -169,10 +172,17 @@ void Session::reference() {
                                           0});
         if (c == 1) end_interrupted("reference not set");
     }
-    try {
-        source_.set_reference();
-    } catch (const SourceError& err) {
-        end_interrupted(std::string("setting the reference failed: ") + err.what());
+    for (int attempt = 1;; ++attempt) {
+        try {
+            source_.set_reference();
+            return;
+        } catch (const SourceError& err) {
+            // No answer: the link may have dropped right after it came back. Get it back and try again
+            // (the bar is still in its calibrator); give up like a lost instrument.
+            if (attempt >= kLinkRetries) end_interrupted(std::string("setting the reference failed: ") + err.what());
+            op_.message(std::string("Setting the reference failed (") + err.what() + "): reconnecting.");
+            wait_for_instrument();
+        }
     }
 }
 
@@ -275,12 +285,34 @@ bool Session::decide_failed_points() {
     return true;
 }
 
+void Session::wait_for_instrument() {
+    for (int i = 0;; ++i) {
+        if (i >= options_.max_reconnect_attempts) end_interrupted("the instrument did not come back");
+        check_stop();
+        bool back = false;
+        try {
+            back = source_.reconnect(options_.read_timeout);
+        } catch (const SourceError& err) {
+            end_interrupted(std::string("the instrument came back unusable: ") + err.what());
+        }
+        if (back) return;
+    }
+}
+
 void Session::stream_on() {
     if (streaming_) return;
-    try {
-        source_.start();
-    } catch (const SourceError& err) {
-        end_interrupted(std::string("the instrument does not stream: ") + err.what());
+    for (int attempt = 1;; ++attempt) {
+        try {
+            source_.start();
+            break;
+        } catch (const SourceError& err) {
+            // A link that broke again between its reconnect and this start (a cable still loose): get it
+            // back and re-reference before streaming, as after any loss; give up like a lost instrument.
+            if (attempt >= kLinkRetries) end_interrupted(std::string("the instrument does not stream: ") + err.what());
+            op_.message(std::string("The instrument does not stream (") + err.what() + "): reconnecting.");
+            wait_for_instrument();
+            reference();
+        }
     }
     streaming_ = true;
     silent_reads_ = 0;
@@ -525,17 +557,7 @@ bool Session::fetch() {
         op_.message(
             "Instrument lost: plug it back in. The running program cannot finish the measurement: "
             "stop it (reset) once the instrument is back; the points it misses go to a retry program.");
-        for (int i = 0;; ++i) {
-            if (i >= options_.max_reconnect_attempts) end_interrupted("the instrument did not come back");
-            check_stop();
-            bool back = false;
-            try {
-                back = source_.reconnect(options_.read_timeout);
-            } catch (const SourceError& err) {
-                end_interrupted(std::string("the instrument came back unusable: ") + err.what());
-            }
-            if (back) break;
-        }
+        wait_for_instrument();
         op_.message("Instrument back. Stop the NC program now (reset): the bar is re-referenced first.");
         reference();
         fire(Event::DeviceBack, "re-referenced");

@@ -93,6 +93,9 @@ class Session {
     void on_void(const AttributionEvent& ev);
     bool fetch();  // false: the instrument was lost (and is back, re-referenced)
     void reference();
+    /// Reconnects until the instrument is back (identified, not streaming); ends the session interrupted
+    /// after options_.max_reconnect_attempts.
+    void wait_for_instrument();
     void stream_on();
     void stream_off();
     void compute_all();
