@@ -16,14 +16,14 @@ struct Node {
     const CLI::App* app = nullptr;
 };
 
-void collect(const CLI::App* app, const std::string& path, std::vector<Node>& out) {
-    out.push_back({path, app});
-    for (const CLI::App* sub : app->get_subcommands([](const CLI::App* s) { return !s->get_group().empty(); }))
-        collect(sub, path.empty() ? sub->get_name() : path + " " + sub->get_name(), out);
-}
-
 std::vector<const CLI::App*> visible_subcommands(const CLI::App* app) {
     return app->get_subcommands([](const CLI::App* s) { return !s->get_group().empty(); });
+}
+
+void collect(const CLI::App* app, const std::string& path, std::vector<Node>& out) {
+    out.push_back({path, app});
+    for (const CLI::App* sub : visible_subcommands(app))
+        collect(sub, path.empty() ? sub->get_name() : path + " " + sub->get_name(), out);
 }
 
 std::vector<const CLI::Option*> named_options(const CLI::App* app) {
@@ -48,6 +48,31 @@ std::string sq(const std::string& s) {
     return out;
 }
 
+/// The shell loop's case that walks the words typed so far down the tree of subcommands (the same in
+/// bash and zsh): "solve" then "solve compensate", and stops at the first word that is no subcommand.
+std::string path_walk_case(const std::vector<Node>& nodes) {
+    std::string paths;
+    for (const auto& n : nodes)
+        if (!n.path.empty()) paths += (paths.empty() ? "" : "|") + std::string("'") + sq(n.path) + "'";
+    return "            " + paths + ") path=\"${path:+$path }$w\" ;;\n        esac\n    done\n";
+}
+
+/// One case line per subcommand whose options take a value, matching "PATH|OPTION": `action` runs when
+/// the previous word is such an option (complete file names: URIs, ids and numbers are typed).
+std::string value_option_cases(const std::vector<Node>& nodes, const std::string& action) {
+    std::string s;
+    for (const auto& n : nodes) {
+        std::string pats;
+        for (const CLI::Option* o : named_options(n.app)) {
+            if (!takes_value(o)) continue;
+            for (const auto& name : option_names(o))
+                pats += (pats.empty() ? "" : "|") + std::string("'") + sq(n.path) + "|" + name + "'";
+        }
+        if (!pats.empty()) s += "        " + pats + ") " + action + " ;;\n";
+    }
+    return s;
+}
+
 std::string bash_script(const CLI::App& root) {
     std::vector<Node> nodes;
     collect(&root, "", nodes);
@@ -61,22 +86,9 @@ std::string bash_script(const CLI::App& root) {
         "    for ((i = 1; i < COMP_CWORD; i++)); do\n"
         "        w=${COMP_WORDS[i]}\n"
         "        case \"${path:+$path }$w\" in\n";
-    std::string paths;
-    for (const auto& n : nodes)
-        if (!n.path.empty()) paths += (paths.empty() ? "" : "|") + std::string("'") + sq(n.path) + "'";
-    s += "            " + paths + ") path=\"${path:+$path }$w\" ;;\n";
-    s += "        esac\n    done\n";
-    // An option that takes a value: complete file names (device URIs, ids and numbers are typed).
+    s += path_walk_case(nodes);
     s += "    case \"$path|$prev\" in\n";
-    for (const auto& n : nodes) {
-        std::string pats;
-        for (const CLI::Option* o : named_options(n.app)) {
-            if (!takes_value(o)) continue;
-            for (const auto& name : option_names(o))
-                pats += (pats.empty() ? "" : "|") + std::string("'") + sq(n.path) + "|" + name + "'";
-        }
-        if (!pats.empty()) s += "        " + pats + ") COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n";
-    }
+    s += value_option_cases(nodes, "COMPREPLY=($(compgen -f -- \"$cur\")); return");
     s += "    esac\n    case \"$path\" in\n";
     for (const auto& n : nodes) {
         std::string words;
@@ -112,21 +124,9 @@ std::string zsh_script(const CLI::App& root) {
         "    for ((i = 2; i < CURRENT; i++)); do\n"
         "        w=${words[i]}\n"
         "        case \"${path:+$path }$w\" in\n";
-    std::string paths;
-    for (const auto& n : nodes)
-        if (!n.path.empty()) paths += (paths.empty() ? "" : "|") + std::string("'") + sq(n.path) + "'";
-    s += "            " + paths + ") path=\"${path:+$path }$w\" ;;\n";
-    s += "        esac\n    done\n";
+    s += path_walk_case(nodes);
     s += "    case \"$path|${words[CURRENT-1]}\" in\n";
-    for (const auto& n : nodes) {
-        std::string pats;
-        for (const CLI::Option* o : named_options(n.app)) {
-            if (!takes_value(o)) continue;
-            for (const auto& name : option_names(o))
-                pats += (pats.empty() ? "" : "|") + std::string("'") + sq(n.path) + "|" + name + "'";
-        }
-        if (!pats.empty()) s += "        " + pats + ") _files; return ;;\n";
-    }
+    s += value_option_cases(nodes, "_files; return");
     s += "    esac\n    case \"$path\" in\n";
     for (const auto& n : nodes) {
         s += "        '" + sq(n.path) + "')\n            subs=(";
