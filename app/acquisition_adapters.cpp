@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "acquisition_adapters.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -183,7 +184,21 @@ void StoreSink::on_transition(const acq::TransitionRecord& t) {
 }
 
 void StoreSink::on_samples(std::span<const analysis::BarSample> samples) {
-    for (const auto& s : samples) writer_.append(s);
+    for (const auto& s : samples) {
+        const std::uint64_t stored = writer_.append(s);
+        if (runs_.empty() || s.seq != last_source_ + 1 || stored != last_stored_ + 1) runs_.push_back({s.seq, stored});
+        last_source_ = s.seq;
+        last_stored_ = stored;
+    }
+}
+
+std::uint64_t StoreSink::stored_seq(std::uint64_t source_seq) const {
+    // The last run starting at or before source_seq (the session passes samples in increasing seq).
+    auto it = std::upper_bound(runs_.begin(), runs_.end(), source_seq,
+                               [](std::uint64_t q, const SeqRun& r) { return q < r.source; });
+    if (it == runs_.begin()) return source_seq;  // not a sample this sink stored
+    --it;
+    return it->stored + (source_seq - it->source);
 }
 
 void StoreSink::on_point(const acq::CapturedPoint& p) {
@@ -200,8 +215,8 @@ void StoreSink::on_point(const acq::CapturedPoint& p) {
     r.reading.n = static_cast<int>(p.n);
     r.reading.std_mm = p.std_mm;
     r.nominal_mm = p.planned.nominal_mm;
-    r.first_seq = p.first_seq;
-    r.last_seq = p.last_seq;
+    r.first_seq = stored_seq(p.first_seq);
+    r.last_seq = stored_seq(p.last_seq);
     store_.add_point(id_, r);
 }
 

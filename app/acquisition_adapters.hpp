@@ -67,10 +67,21 @@ class StoreSink : public acquisition::SessionSink {
     void finish(const acquisition::SessionSummary& summary);
 
   private:
+    /// The stored seq of a sample the source numbered `source_seq` (the source leaves a hole in its
+    /// numbering at every gap and restarts at 0 in a resumed run; storage numbers gap-free and goes on
+    /// from the stored samples, so a point's window is stored in storage's numbering).
+    std::uint64_t stored_seq(std::uint64_t source_seq) const;
+
     storage::Store& store_;
     std::int64_t id_;
     const acquisition::Plan& plan_;
     storage::SampleWriter writer_;
+    /// One entry per run of consecutive source seqs: where it starts in both numberings.
+    struct SeqRun {
+        std::uint64_t source = 0, stored = 0;
+    };
+    std::vector<SeqRun> runs_;
+    std::uint64_t last_source_ = 0, last_stored_ = 0;
 };
 
 /// Stores the plan with a new session (for --resume) and reads it back.

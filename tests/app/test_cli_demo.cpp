@@ -9,10 +9,15 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <map>
+#include <sstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <tuple>
+#include <vector>
 
 namespace {
 
@@ -40,6 +45,56 @@ std::filesystem::path temp_db(const std::string& name) {
     const auto db = dir / name;
     std::filesystem::remove(db);
     return db;
+}
+
+/// The rows of a CSV file with a header line, as column → text.
+std::vector<std::map<std::string, std::string>> read_csv(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    std::vector<std::map<std::string, std::string>> rows;
+    std::string line, cell;
+    std::vector<std::string> header;
+    while (std::getline(in, line)) {
+        std::vector<std::string> cells;
+        std::istringstream ls(line);
+        while (std::getline(ls, cell, ',')) cells.push_back(cell);
+        if (header.empty()) {
+            header = cells;
+            continue;
+        }
+        auto& row = rows.emplace_back();
+        for (std::size_t i = 0; i < cells.size() && i < header.size(); ++i) row[header[i]] = cells[i];
+    }
+    return rows;
+}
+
+/// Every stored point's window [first_seq, last_seq] holds exactly its n stored samples, and their mean
+/// is the point's reading less one constant (the reference): the windows name the samples that made the
+/// points, also after gaps in the stream and reconnects.
+void expect_windows_name_their_samples(const std::filesystem::path& db, int session) {
+    const auto dir = db.parent_path() / (db.stem().string() + "-csv");
+    std::filesystem::remove_all(dir);
+    const DemoRun ex = run("--db " + db.string() + " export " + std::to_string(session) + " --format csv --out " +
+                           dir.string());
+    ASSERT_EQ(ex.status, 0);
+    std::map<long long, double> displacement_mm;
+    for (const auto& s : read_csv(dir / "samples.csv"))
+        displacement_mm[std::stoll(s.at("seq"))] = std::stod(s.at("displacement_nm")) * 1e-6;
+    const auto points = read_csv(dir / "points.csv");
+    ASSERT_FALSE(points.empty());
+    std::optional<double> offset_mm;
+    for (const auto& p : points) {
+        const long long first = std::stoll(p.at("first_seq")), last = std::stoll(p.at("last_seq"));
+        double sum = 0;
+        long long n = 0;
+        for (auto it = displacement_mm.lower_bound(first); it != displacement_mm.end() && it->first <= last; ++it) {
+            sum += it->second;
+            ++n;
+        }
+        ASSERT_EQ(n, std::stoll(p.at("n"))) << "point " << p.at("index") << " window " << first << ".." << last;
+        const double off = std::stod(p.at("measured_mm")) - sum / static_cast<double>(n);
+        if (!offset_mm) offset_mm = off;
+        EXPECT_NEAR(off, *offset_mm, 1e-6) << "point " << p.at("index");
+    }
 }
 
 constexpr double kPositionTol_mm = 0.001;
@@ -120,6 +175,7 @@ TEST_P(DemoFaults, RecoversTheErrorsUnderFaults) {
     const DemoRun rep =
         run("--db " + db.string() + " report " + std::to_string(j.at("session").get<int>()) + " --json");
     EXPECT_EQ(rep.status, 0) << rep.out.substr(0, 400);
+    expect_windows_name_their_samples(db, j.at("session").get<int>());
 }
 
 INSTANTIATE_TEST_SUITE_P(
