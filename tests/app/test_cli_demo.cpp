@@ -12,9 +12,9 @@
 #include <fstream>
 #include <functional>
 #include <map>
-#include <sstream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -73,8 +73,8 @@ std::vector<std::map<std::string, std::string>> read_csv(const std::filesystem::
 void expect_windows_name_their_samples(const std::filesystem::path& db, int session) {
     const auto dir = db.parent_path() / (db.stem().string() + "-csv");
     std::filesystem::remove_all(dir);
-    const DemoRun ex = run("--db " + db.string() + " export " + std::to_string(session) + " --format csv --out " +
-                           dir.string());
+    const DemoRun ex =
+        run("--db " + db.string() + " export " + std::to_string(session) + " --format csv --out " + dir.string());
     ASSERT_EQ(ex.status, 0);
     std::map<long long, double> displacement_mm;
     for (const auto& s : read_csv(dir / "samples.csv"))
