@@ -159,13 +159,16 @@ void parse_faults(const json& j, FaultConfig& f) {
     const std::string w = "faults";
     only_keys(j, w,
               {"drop_frame_probability", "corrupt_byte_probability", "stall_at_s", "stall_s", "disconnect_at_s",
-               "disconnect_s", "reply_delay_ms", "replay_frame_probability", "start_delay_s", "feed_override"});
+               "disconnect_s", "reply_delay_ms", "replay_frame_probability", "start_delay_s", "feed_override",
+               "answer_delay_s"});
     f.drop_frame_probability = num(j, w, "drop_frame_probability", f.drop_frame_probability);
     f.corrupt_byte_probability = num(j, w, "corrupt_byte_probability", f.corrupt_byte_probability);
     f.replay_frame_probability = num(j, w, "replay_frame_probability", f.replay_frame_probability);
     f.start_delay_s = num(j, w, "start_delay_s", f.start_delay_s);
     f.feed_override = num(j, w, "feed_override", f.feed_override);
+    f.answer_delay_s = num(j, w, "answer_delay_s", f.answer_delay_s);
     if (!(f.start_delay_s >= 0)) fail(w + ".start_delay_s", "must not be negative");
+    if (!(f.answer_delay_s >= 0 && f.answer_delay_s <= 3600)) fail(w + ".answer_delay_s", "must be in [0, 3600]");
     if (!(f.feed_override >= 0.1 && f.feed_override <= 2.0)) fail(w + ".feed_override", "must be in [0.1, 2]");
     for (double pr : {f.drop_frame_probability, f.corrupt_byte_probability, f.replay_frame_probability}) {
         if (!(pr >= 0 && pr <= 1)) fail(w, "probabilities must be in [0, 1]");

@@ -169,6 +169,8 @@ void SimulatedMachine::run_nc(std::string_view text, analysis::NcDialect dialect
 void SimulatedMachine::stop(double t_s) {
     std::lock_guard lock(mutex_);
     const Pose here = pose_locked(t_s);
+    if (keep_history_ && !queue_.empty() && queue_.front().t0 < now_s_)
+        history_.push_back({queue_.front().from, here, queue_.front().t0, now_s_});  // cut short here
     queue_.clear();
     held_.reset();
     last_pose_ = here;
@@ -179,6 +181,7 @@ Pose SimulatedMachine::pose_locked(double t_s) {
     now_s_ = std::max(now_s_, t_s);
     while (!queue_.empty() && queue_.front().t1 <= now_s_) {
         current_ = queue_.front().to;
+        if (keep_history_) history_.push_back(queue_.front());
         queue_.pop_front();
     }
     if (!queue_.empty() && queue_.front().t0 < now_s_) {
@@ -186,6 +189,32 @@ Pose SimulatedMachine::pose_locked(double t_s) {
         current_ = lerp(s.from, s.to, (now_s_ - s.t0) / (s.t1 - s.t0));
     }
     return current_;
+}
+
+analysis::Vec3 SimulatedMachine::socket_at_locked(double t_s) const {
+    // Moves are appended in time order (each at the end of the motion queued when it was made).
+    for (auto it = socket_moves_.rbegin(); it != socket_moves_.rend(); ++it)
+        if (it->first <= t_s) return it->second;
+    return setup_.socket_mm;
+}
+
+std::optional<SimulatedMachine::Truth> SimulatedMachine::truth_at(double t_s) const {
+    std::lock_guard lock(mutex_);
+    if (!keep_history_ || t_s > now_s_) return std::nullopt;
+    Truth out;
+    out.socket_mm = socket_at_locked(t_s);
+    // The pose: the last motion started at or before t_s, done or in progress.
+    auto in = [t_s](const Segment& g) {
+        return t_s <= g.t1 ? (g.t1 > g.t0 ? lerp(g.from, g.to, (t_s - g.t0) / (g.t1 - g.t0)) : g.to) : g.to;
+    };
+    if (!queue_.empty() && queue_.front().t0 <= t_s) {
+        out.pose = in(queue_.front());
+        return out;
+    }
+    auto it =
+        std::upper_bound(history_.begin(), history_.end(), t_s, [](double t, const Segment& g) { return t < g.t0; });
+    out.pose = it == history_.begin() ? history_start_ : in(*std::prev(it));
+    return out;
 }
 
 Pose SimulatedMachine::pose_at(double t_s) {
@@ -204,13 +233,15 @@ bool SimulatedMachine::idle_at(double t_s) const {
 
 double SimulatedMachine::true_distance_mm(double t_s) {
     const Pose pose = pose_at(t_s);
-    const auto balls = analysis::actual_balls(setup_.geometry, setup_.errors, pose, actual_socket_mm(), {t_s, 20.0});
+    const analysis::Vec3 socket = actual_socket_mm();  // at t_s: pose_at moved the clock there
+    const auto balls = analysis::actual_balls(setup_.geometry, setup_.errors, pose, socket, {t_s, 20.0});
     return (balls.tool - balls.table).norm();
 }
 
 double SimulatedMachine::bar_reading_mm(double t_s, double bar_temp_C) {
     const Pose pose = pose_at(t_s);
-    return analysis::predicted_reading(setup_.geometry, setup_.errors, pose, actual_socket_mm(), {t_s, bar_temp_C});
+    const analysis::Vec3 socket = actual_socket_mm();  // at t_s: pose_at moved the clock there
+    return analysis::predicted_reading(setup_.geometry, setup_.errors, pose, socket, {t_s, bar_temp_C});
 }
 
 }  // namespace ballbar::device

@@ -217,6 +217,39 @@ TEST(Emulator, MachineExecutesNcProgram) {
     EXPECT_NEAR(m.true_distance_mm(3.0), 150.0, 1e-9);
 }
 
+/// The truth a campaign checks stored points against: where the machine stood at a past time, also in
+/// a move cut short by a stop; and a socket the operator moves at a program stop moves when the
+/// machine stands there, not while the motion queued before it still runs.
+TEST(Emulator, MachineRemembersWhereItStoodAndWhenTheSocketMoved) {
+    auto cfg = quiet_config();
+    cfg.machine.socket_mm = analysis::Vec3(100, 0, 0);
+    Emulator emu(cfg);
+    auto& m = emu.machine();
+    EXPECT_FALSE(m.truth_at(0.0)) << "no history asked for";
+    m.keep_history();
+    const analysis::Pose start = cfg.machine.start;
+    analysis::Pose far = start;
+    far.X_mm += 10;
+    m.move_to(far, 600);                         // 1 s
+    m.dwell(1);                                  // until 2 s
+    m.set_socket_mm(analysis::Vec3(120, 0, 0));  // the operator, at the stop after the dwell
+    EXPECT_NEAR(m.actual_socket_mm().x(), 100, 1e-12) << "not while the machine still moves";
+    EXPECT_NEAR(m.bar_reading_mm(1.5, 20.0) - m.bar_reading_mm(1.9, 20.0), 0, 1e-12);
+    analysis::Pose back = far;
+    back.X_mm -= 20;
+    m.move_to(back, 600);  // 2 s: from 2 s to 4 s, stopped at 3 s
+    m.stop(3.0);
+    m.pose_at(5.0);
+    ASSERT_TRUE(m.truth_at(0.5));
+    EXPECT_NEAR(m.truth_at(0.5)->pose.X_mm, start.X_mm + 5, 1e-9);
+    EXPECT_NEAR(m.truth_at(1.5)->pose.X_mm, far.X_mm, 1e-9);
+    EXPECT_NEAR(m.truth_at(1.5)->socket_mm.x(), 100, 1e-12);
+    EXPECT_NEAR(m.truth_at(2.5)->socket_mm.x(), 120, 1e-12);
+    EXPECT_NEAR(m.truth_at(2.5)->pose.X_mm, far.X_mm - 5, 1e-9);
+    EXPECT_NEAR(m.truth_at(4.5)->pose.X_mm, far.X_mm - 10, 1e-9) << "stood where the stop left it";
+    EXPECT_FALSE(m.truth_at(6.0)) << "a time the machine has not reached";
+}
+
 TEST(Faults, DroppedFramesAreCountedNeverHidden) {
     auto cfg = quiet_config();
     cfg.faults.drop_frame_probability = 0.1;

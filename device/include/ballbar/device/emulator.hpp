@@ -53,8 +53,9 @@ struct FaultConfig {
     double reply_delay_ms = 0;            ///< replies are sent this late
     double replay_frame_probability = 0;  ///< a stream frame is sent twice (same sequence number)
     // The machine's side (applied by whoever runs its programs: the demo's operator).
-    double start_delay_s = 0;  ///< each program starts this long after the operator is told to start it
-    double feed_override = 1;  ///< feed override of the machine's G1 moves (G4 dwells keep their time)
+    double start_delay_s = 0;   ///< each program starts this long after the operator is told to start it
+    double feed_override = 1;   ///< feed override of the machine's G1 moves (G4 dwells keep their time)
+    double answer_delay_s = 0;  ///< the operator presses cycle start this long after the machine reaches a stop
 };
 
 struct NcSource {
@@ -103,6 +104,7 @@ class Emulator : public DeviceEndpoint {
     std::size_t pending_output() const { return out_.size() - out_head_; }
 
     SimulatedMachine& machine() { return machine_; }
+    const SimulatedMachine& machine() const { return machine_; }
     const EmulatorConfig& config() const { return config_; }
     FaultConfig& faults() { return config_.faults; }
     bool streaming() const { return streaming_; }
@@ -112,6 +114,7 @@ class Emulator : public DeviceEndpoint {
         std::uint64_t samples = 0;          ///< generated while streaming
         std::uint64_t stream_frames = 0;    ///< sent
         std::uint64_t dropped_frames = 0;   ///< by fault injection or overrun
+        std::uint64_t dropped_samples = 0;  ///< the samples those frames held
         std::uint64_t replayed_frames = 0;  ///< sent twice by fault injection
         std::uint64_t cycle_starts = 0;     ///< host Start requests taken as cycle start
         std::uint64_t programs_started = 0;

@@ -9,10 +9,12 @@
 // emulator samples it while another thread queues motion.
 #pragma once
 
+#include <algorithm>
 #include <deque>
 #include <mutex>
 #include <optional>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "ballbar/analysis/error_params.hpp"
@@ -38,15 +40,34 @@ class SimulatedMachine {
 
     const MachineSetup& setup() const { return setup_; }
     const analysis::ErrorParams& true_errors() const { return setup_.errors; }
+    /// Where the socket truly is now (its nominal position at the latest time asked, plus its set-up
+    /// offset).
     analysis::Vec3 actual_socket_mm() const {
         std::lock_guard lock(mutex_);
-        return setup_.socket_mm + setup_.socket_offset_mm;
+        return socket_at_locked(now_s_) + setup_.socket_offset_mm;
     }
-    /// The operator moved the socket to `nominal_mm` (table frame; its set-up offset stays).
+    /// The operator moves the socket to `nominal_mm` (table frame; its set-up offset stays) once the
+    /// machine has done the motion queued so far: as at a program stop, where the machine stands still.
     void set_socket_mm(const analysis::Vec3& nominal_mm) {
         std::lock_guard lock(mutex_);
-        setup_.socket_mm = nominal_mm;
+        socket_moves_.push_back({std::max(queue_end_s_, now_s_), nominal_mm});
     }
+
+    /// From now on the machine remembers every motion it made and every socket move, so a checker can
+    /// ask afterwards where it truly stood at a past time (truth_at). For tests and campaigns: the
+    /// memory grows with the number of moves.
+    void keep_history() {
+        std::lock_guard lock(mutex_);
+        keep_history_ = true;
+        history_start_ = current_;
+    }
+    struct Truth {
+        analysis::Pose pose;
+        analysis::Vec3 socket_mm;  ///< nominal socket position, table frame
+    };
+    /// Where the machine stood at `t_s`, a time it has already passed (keep_history() first); empty for
+    /// a time still ahead of it.
+    std::optional<Truth> truth_at(double t_s) const;
 
     /// G1: straight move in axis space at `feed_mm_min` (rotary axes read it as deg/min; a mixed move
     /// takes the longer of the two). Starts when the queue ahead of it is done.
@@ -95,6 +116,7 @@ class SimulatedMachine {
         double t0 = 0, t1 = 0;
     };
     void enqueue(const analysis::Pose& target, double duration_s);
+    analysis::Vec3 socket_at_locked(double t_s) const;
     analysis::Pose pose_locked(double t_s);
     void queue_blocks(const analysis::NcProgram& program, const std::vector<analysis::Pose>& poses, std::size_t from,
                       double feed);
@@ -107,6 +129,10 @@ class SimulatedMachine {
     };
     std::optional<Held> held_;
     double feed_override_ = 1.0;
+    bool keep_history_ = false;
+    analysis::Pose history_start_;
+    std::vector<Segment> history_;  ///< motions done (or cut short by stop), in time order
+    std::vector<std::pair<double, analysis::Vec3>> socket_moves_;  ///< time, nominal position from then on
 
     MachineSetup setup_;
     mutable std::mutex mutex_;
