@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "ballbar/acquisition/bar_check.hpp"
@@ -392,8 +393,11 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
     std::vector<std::size_t> entry_of(plan_.points.size(), prog.entries.size());
     for (std::size_t k = 0; k < prog.entries.size(); ++k) entry_of[prog.entries[k].point] = k;
 
-    double deadline_s = 0;  // stream time by which the entry at cursor_ is due ...
-    bool armed = false;     // ... once the stream (re)started
+    double deadline_s = 0;     // stream time by which the entry at cursor_ is due ...
+    bool armed = false;        // ... once the machine moves after a start or cycle start
+    bool still_seen = false;   // a first sample after the (cycle) start came: the bar length ...
+    double still_mm = 0;       // ... it stood at ...
+    double still_since_s = 0;  // ... since this time
     auto arm = [&](double from_s, double extra_s) {
         deadline_s = from_s + extra_s + (cursor_ < prog.entries.size() ? entry_timeout_s(prog.entries[cursor_]) : 0);
         armed = true;
@@ -407,6 +411,7 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
         if (need_stops && !prog.entries[cursor_].stops_before.empty()) {
             program_stops(prog.entries[cursor_]);
             armed = false;
+            still_seen = false;
         }
         need_stops = false;
         if (cs.manual && manual_at != cursor_) {
@@ -432,7 +437,19 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
         for (std::size_t i = 0; i < buffer_n_; ++i) {
             const BarSample& s = buffer_[i];
             const double t_s = 1e-6 * static_cast<double>(s.device_time_us);
-            if (!armed) arm(t_s, options_.start_grace_s);  // after a start or a cycle start
+            if (!armed) {  // after a start or a cycle start: from the first motion on
+                const double len_mm = 1e-6 * static_cast<double>(s.displacement_nm);
+                if (cs.manual) {
+                    arm(t_s, options_.start_grace_s);
+                } else if (!still_seen) {
+                    still_seen = true;
+                    still_mm = len_mm;
+                    still_since_s = t_s;
+                } else if (std::abs(len_mm - still_mm) > options_.motion_start_mm ||
+                           t_s - still_since_s > options_.max_standstill_s) {
+                    arm(t_s, options_.start_grace_s);
+                }
+            }
             AttributionEvent ev;
             if (cs.manual) {
                 // Manual capture: the operator's word is the evidence; a window is averaged now.

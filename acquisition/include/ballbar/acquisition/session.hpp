@@ -37,6 +37,12 @@ struct SessionOptions {
     /// Stream time allowed from telling the operator to start a program (or to press cycle start) to
     /// the program's first dwell, on top of the program's own timing.
     double start_grace_s = 120;
+    /// The program's timing runs from the machine's first motion after a start or cycle start (a bar
+    /// length this far from where it stood: below the smallest point-code tag), so a machine standing
+    /// at a stop (cycle start pressed late, a feed hold) is not late ...
+    double motion_start_mm = 0.1;
+    /// ... unless it stands still this long: then the timing runs anyway.
+    double max_standstill_s = 300;
     /// The slowest feed override the timing allows for (moves take up to 1/override as long).
     double slowest_feed_override = 0.5;
     /// The slowest rapid assumed for G0 moves (mm/min).
