@@ -24,7 +24,16 @@ DeviceSource::DeviceSource(Opener open, int sample_rate_hz) : open_(std::move(op
 
 acq::InstrumentStatus DeviceSource::open_and_identify() {
     inst_ = std::make_unique<device::Instrument>(open_());
-    info_ = inst_->identify();
+    const device::InstrumentInfo info = inst_->identify();
+    if (info_ && (info.model != info_->model || info.serial != info_->serial ||
+                  info.calibrated_length_mm != info_->calibrated_length_mm)) {
+        // After a loss, another instrument answers where the session's was (a port name reused after a
+        // replug, another bar plugged in): it is not the session's instrument, so the session's is not
+        // back (reconnect() says so; connect() is the first identify and takes any).
+        inst_.reset();
+        return {};
+    }
+    info_ = info;
     if (on_identified) on_identified(*info_);
     const device::InstrumentStatus st = inst_->status();
     acq::InstrumentStatus s;
@@ -41,6 +50,7 @@ acq::InstrumentStatus DeviceSource::open_and_identify() {
 acq::InstrumentStatus DeviceSource::connect() {
     try {
         acq::InstrumentStatus s = open_and_identify();
+        if (!inst_) throw SourceError("another instrument answers than " + info_->model + " " + info_->serial);
         inst_->configure(rate_hz_, 1);
         return s;
     } catch (const device::DeviceError& e) {
@@ -113,6 +123,10 @@ bool DeviceSource::reconnect(std::chrono::milliseconds timeout) {
         inst_.reset();
         const acq::InstrumentStatus s = open_and_identify();
         (void)s;
+        if (!inst_) {  // another instrument answered
+            std::this_thread::sleep_for(timeout);
+            return false;
+        }
         inst_->configure(rate_hz_, 1);
         return true;  // not streaming: the session re-references the instrument first
     } catch (const device::DeviceError& e) {
