@@ -41,6 +41,7 @@ struct PlanOptions {
     std::string out = "-";
     std::string test_out;
     double dwell_s = 1.0;
+    std::optional<double> rate_hz;
     bool store = false;
 };
 
@@ -73,6 +74,33 @@ std::string num(double v) {
     while (!s.empty() && s.back() == '0') s.pop_back();
     if (!s.empty() && s.back() == '.') s.pop_back();
     return s == "-0" ? "0" : s;
+}
+
+/// --rate: refuses a feed whose samples lie too far apart along the path for the diagnosis
+/// (circ::sampling_limit), naming the highest usable feed.
+void check_feed_for_rate(const circ::TestSpec& t, std::optional<double> rate) {
+    if (!rate) return;
+    const double rate_hz = *rate;
+    if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
+        throw CliError(kExitUsage, "--rate must be a reading rate > 0, readings/s");
+    const circ::SamplingLimit lim = circ::sampling_limit(t, rate_hz);
+    const double spacing_mm = t.feed_mm_min / (60.0 * rate_hz);
+    const std::string need =
+        std::string(lim.binding) == "feed-in"
+            ? "three samples on the " + num(t.feed_in_mm) + " mm feed-in"
+            : "two samples per " + num(analysis::circular::AnalysisOptions{}.min_pitch_mm) + " mm cyclic-error pitch";
+    const double highest = std::floor(lim.max_feed_mm_min + 1e-6);
+    if (spacing_mm <= lim.max_spacing_mm * (1.0 + 1e-9)) {
+        std::cerr << "ballbar: at " << num(rate_hz) << " readings/s the samples lie " << num(spacing_mm)
+                  << " mm apart along the path (at most " << num(lim.max_spacing_mm) << " mm: " << need
+                  << "); the highest usable feed is " << num(highest) << " mm/min\n";
+        return;
+    }
+    throw CliError(kExitUsage, "--feed " + num(t.feed_mm_min) + " mm/min is too fast for " + num(rate_hz) +
+                                   " readings/s: the samples would lie " + num(spacing_mm) +
+                                   " mm apart along the path, and the diagnosis needs at most " +
+                                   num(lim.max_spacing_mm) + " mm (" + need + "); the highest usable feed is " +
+                                   num(highest) + " mm/min (--feed " + num(highest) + ")");
 }
 
 /// The part program of trace.md's "The motion", run by run, arcs split into ≤ 90° blocks.
@@ -164,6 +192,7 @@ void write_out(const std::string& path, const std::string& text) {
 
 int run_plan(const PlanOptions& o, const Globals& globals) {
     const circ::TestSpec t = plan_test(o);
+    check_feed_for_rate(t, o.rate_hz);
     std::optional<acquisition::MachineFile> machine;
     if (!o.machine_file.empty()) {
         try {
@@ -323,6 +352,8 @@ BALLBAR_COMMAND(circle) {
     plan->add_option("--radius", po->radius_mm, "programmed radius = bar length, mm")->capture_default_str();
     plan->add_option("--centre", po->centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
     plan->add_option("--feed", po->feed_mm_min, "feed of every move, mm/min")->capture_default_str();
+    plan->add_option("--rate", po->rate_hz,
+                     "the instrument's reading rate, readings/s: refuse a feed too fast for it (gauges: 10-50)");
     plan->add_option("--feed-in", po->feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
     plan->add_option("--arc", po->arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
         ->capture_default_str();

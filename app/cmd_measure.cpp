@@ -191,8 +191,10 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     const auto gauge = make_gauge_source(uri, plan.spec.bar_length_mm);  // a digital gauge (gauge_source.hpp)
     acq::Session session(plan, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, *op, options);
     session.restore(done);
+    const std::uint64_t first_seq = store.next_seq(id);  // this run's samples (a resume continues after)
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);
+    if (gauge) store_gauge_instrument(store, id, *gauge, first_seq);  // identity, resolution, rate
     if (sum.interrupted) {
         std::string retry;
         if (!sum.missing.empty()) {

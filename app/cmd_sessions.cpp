@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // `ballbar sessions [--json]` lists the stored sessions; `ballbar sessions show SESSION [--json]` shows
 // one (SESSION: id or uuid prefix) with its audit trail, points summary and results.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -60,6 +61,29 @@ int list_sessions(const SessionsOptions& o, const Globals& globals) {
     return kExitOk;
 }
 
+/// Each sample segment with the instrument's resolution and measured reading rate over its samples
+/// (schema v4); nothing for a session whose segments carry none.
+void print_segments(storage::Store& store, std::int64_t id) {
+    const auto segments = store.sample_segments(id);
+    const bool any = std::any_of(segments.begin(), segments.end(),
+                                 [](const storage::SampleSegment& g) { return g.resolution_mm || g.reading_rate_hz; });
+    if (!any) return;
+    const std::uint64_t end = store.next_seq(id);
+    for (std::size_t k = 0; k < segments.size(); ++k) {
+        const auto& g = segments[k];
+        const std::uint64_t next = k + 1 < segments.size() ? segments[k + 1].first_seq : end;
+        std::cout << "    samples " << g.first_seq << "-" << (next > g.first_seq ? next - 1 : g.first_seq) << ": ";
+        char line[120];
+        if (g.resolution_mm && g.reading_rate_hz) {
+            std::snprintf(line, sizeof line, "resolution %.4g µm, %.1f readings/s measured", *g.resolution_mm * 1e3,
+                          *g.reading_rate_hz);
+            std::cout << line << '\n';
+        } else {
+            std::cout << "resolution and reading rate not recorded\n";
+        }
+    }
+}
+
 int show_session(const SessionsOptions& o, const Globals& globals) {
     auto store = open_reader(globals);
     const auto id = store.find_session(o.session);
@@ -106,7 +130,9 @@ int show_session(const SessionsOptions& o, const Globals& globals) {
                       clock.segments() == 1 ? "" : "s (device clock runs: reconnects, resumes)");
         std::cout << span;
     }
-    std::cout << "\n  points      " << s.point_count << '\n';
+    std::cout << '\n';
+    print_segments(store, id);
+    std::cout << "  points      " << s.point_count << '\n';
     for (const auto& p : store.points(id)) {
         const auto& rd = p.reading;
         char line[200];

@@ -137,8 +137,8 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     GaugeDemoOperator op(plan, machine, emu);
     acq::Session session(plan, source, sink, op);
     const acq::SessionSummary sum = session.run();
-    // The gauge's identity, measured resolution and reading rate: session-level instrument metadata.
-    store.add_result(id, "instrument", source.instrument_json(), std::nullopt, "ballbar gauge/1");
+    // The gauge's identity, metadata, and its resolution and measured reading rate on every sample.
+    store_gauge_instrument(store, id, source, 0, /*keep_instrument=*/true);
     sink.finish(sum);
     if (sum.final_state != acq::State::Done)
         throw CliError(kExitFailure, "demo session " + std::to_string(id) + " ended " +

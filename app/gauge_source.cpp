@@ -128,7 +128,7 @@ std::string GaugeSource::instrument_json() const {
     return j.dump();
 }
 
-std::unique_ptr<acq::SampleSource> make_gauge_source(const std::string& uri, double calibrated_length_mm) {
+std::unique_ptr<GaugeSource> make_gauge_source(const std::string& uri, double calibrated_length_mm) {
     if (!gg::is_gauge_uri(uri)) return nullptr;
     gg::BarOnGauge bar;
     bar.calibrated_length_mm = calibrated_length_mm;
@@ -138,6 +138,24 @@ std::unique_ptr<acq::SampleSource> make_gauge_source(const std::string& uri, dou
         throw SourceError(e.what());
     }
     return std::make_unique<GaugeSource>([uri] { return gg::open_gauge(uri); }, bar);
+}
+
+void store_gauge_instrument(storage::Store& store, std::int64_t session_id, const GaugeSource& source,
+                            std::uint64_t first_seq, bool keep_instrument) {
+    const auto& id = source.identity();
+    if (!id) return;
+    if (!keep_instrument) {
+        storage::Instrument in;
+        in.model = id->maker + " " + id->model;
+        in.serial = id->serial;
+        in.firmware = id->firmware;
+        in.calibrated_length_mm = source.bar().calibrated_length_mm;
+        store.set_instrument(session_id, in);
+    }
+    store.add_result(session_id, "instrument", source.instrument_json(), std::nullopt, "ballbar gauge/1");
+    const gg::SamplerStats& st = source.stats();
+    if (st.resolution_mm > 0 && st.rate_hz > 0)
+        store.set_segment_instrument(session_id, first_seq, st.resolution_mm, st.rate_hz);
 }
 
 }  // namespace ballbar::app

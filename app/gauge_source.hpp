@@ -13,6 +13,7 @@
 
 #include "ballbar/acquisition/interfaces.hpp"
 #include "ballbar/device/gauge.hpp"
+#include "ballbar/storage/store.hpp"
 
 namespace ballbar::app {
 
@@ -34,6 +35,7 @@ class GaugeSource : public acquisition::SampleSource {
     std::string instrument_json() const;
     const std::optional<device::gauge::Identity>& identity() const { return identity_; }
     const device::gauge::SamplerStats& stats() const;
+    const device::gauge::BarOnGauge& bar() const { return bar_; }
 
   private:
     acquisition::InstrumentStatus open_and_measure();
@@ -51,7 +53,14 @@ class GaugeSource : public acquisition::SampleSource {
 
 /// For `measure --device URI`: a GaugeSource on a bar of `calibrated_length_mm` (the URI's sign= and
 /// rate= applied), or null when `uri` is not a gauge's.
-std::unique_ptr<acquisition::SampleSource> make_gauge_source(const std::string& uri, double calibrated_length_mm);
+std::unique_ptr<GaugeSource> make_gauge_source(const std::string& uri, double calibrated_length_mm);
+
+/// After a run on a gauge: its identity as the session's instrument (unless `keep_instrument`), its
+/// metadata as the result of kind `instrument`, and its resolution and measured reading rate on the
+/// sample segments from `first_seq` on (every sample of the run: Store::segment_of). Nothing before the
+/// gauge was identified.
+void store_gauge_instrument(storage::Store& store, std::int64_t session_id, const GaugeSource& source,
+                            std::uint64_t first_seq, bool keep_instrument = false);
 
 /// `ballbar demo --instrument KIND`: the SSM procedure on the emulated gauge sitting on the simulated
 /// machine; prints measured vs true errors like the plain demo. `db_path` as resolve_db_path gives it.

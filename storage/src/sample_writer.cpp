@@ -43,7 +43,11 @@ SampleWriter::~SampleWriter() {
 std::uint64_t SampleWriter::append(const analysis::BarSample& sample) {
     const std::uint64_t seq = next_seq_++;
     if (segment_due_ || sample.device_time_us < last_device_time_us_) {
-        pending_segments_.push_back({seq, sample.device_time_us, store_.now_iso8601()});
+        SampleSegment g;
+        g.first_seq = seq;
+        g.device_time_us = sample.device_time_us;
+        g.started_at = store_.now_iso8601();
+        pending_segments_.push_back(std::move(g));
         segment_due_ = false;
     }
     last_device_time_us_ = sample.device_time_us;

@@ -131,6 +131,27 @@ CREATE TABLE sample_segments (
 ) WITHOUT ROWID;
 )sql";
 
-inline constexpr std::array<std::string_view, 3> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3};
+// v4: the instrument's resolution and actually measured reading rate with every sample, through its
+// segment (a sample belongs to the segment with the largest first_seq ≤ its seq; the view
+// sample_instruments gives them per sample). NULL: not known (the project's own instrument, imports).
+// Sessions of v3 whose gauge wrote them once as the session's `instrument` result get them on each of
+// their segments (the values that result measured).
+inline constexpr std::string_view kMigrationV4 = R"sql(
+ALTER TABLE sample_segments ADD COLUMN resolution_mm REAL CHECK (resolution_mm IS NULL OR resolution_mm > 0);
+ALTER TABLE sample_segments ADD COLUMN reading_rate_hz REAL CHECK (reading_rate_hz IS NULL OR reading_rate_hz > 0);
+UPDATE sample_segments SET
+  resolution_mm = (SELECT json_extract(r.payload_json, '$.resolution_mm') FROM results r
+                   WHERE r.session_id = sample_segments.session_id AND r.kind = 'instrument' AND json_valid(r.payload_json)
+                     AND json_extract(r.payload_json, '$.resolution_mm') > 0 ORDER BY r.id DESC LIMIT 1),
+  reading_rate_hz = (SELECT json_extract(r.payload_json, '$.reading_rate_hz') FROM results r
+                     WHERE r.session_id = sample_segments.session_id AND r.kind = 'instrument' AND json_valid(r.payload_json)
+                       AND json_extract(r.payload_json, '$.reading_rate_hz') > 0 ORDER BY r.id DESC LIMIT 1);
+CREATE VIEW sample_instruments AS
+  SELECT s.session_id, s.seq, g.first_seq AS segment_first_seq, g.resolution_mm, g.reading_rate_hz
+  FROM samples s JOIN sample_segments g ON g.session_id = s.session_id AND g.first_seq =
+    (SELECT max(h.first_seq) FROM sample_segments h WHERE h.session_id = s.session_id AND h.first_seq <= s.seq);
+)sql";
+
+inline constexpr std::array<std::string_view, 4> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3, kMigrationV4};
 
 }  // namespace ballbar::storage::detail

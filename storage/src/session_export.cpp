@@ -108,6 +108,15 @@ std::string session_json(Store& store, std::int64_t id, bool with_points, int in
         procedure.push_back({{"from", p.from}, {"to", p.to}, {"event", p.event}, {"detail", p.detail}, {"at", p.at}});
     }
     doc["procedure"] = procedure;
+    ojson segments = ojson::array();
+    for (const auto& g : store.sample_segments(id)) {
+        segments.push_back({{"first_seq", g.first_seq},
+                            {"device_time_us", g.device_time_us},
+                            {"started_at", g.started_at},
+                            {"resolution_mm", opt(g.resolution_mm)},
+                            {"reading_rate_hz", opt(g.reading_rate_hz)}});
+    }
+    doc["sample_segments"] = segments;
     if (with_points) {
         ojson points = ojson::array();
         for (const auto& p : store.points(id)) points.push_back(point_json(p));

@@ -108,14 +108,41 @@ void Store::add_sample_segment(std::int64_t session_id, const SampleSegment& g) 
 std::vector<SampleSegment> Store::sample_segments(std::int64_t session_id) {
     std::vector<SampleSegment> out;
     if (schema_version_ < 3) return out;  // an older file opened read-only
-    auto st = db_.prepare(
-        "SELECT first_seq, device_time_us, started_at FROM sample_segments WHERE session_id = ? ORDER BY first_seq");
+    auto st = db_.prepare(schema_version_ < 4 ? "SELECT first_seq, device_time_us, started_at, NULL, NULL FROM "
+                                                "sample_segments WHERE session_id = ? ORDER BY first_seq"
+                                              : "SELECT first_seq, device_time_us, started_at, resolution_mm, "
+                                                "reading_rate_hz FROM sample_segments WHERE session_id = ? ORDER BY "
+                                                "first_seq");
     st.bind(1, session_id);
     while (st.step()) {
-        out.push_back({static_cast<std::uint64_t>(st.column_int(0)), static_cast<std::uint64_t>(st.column_int(1)),
-                       st.column_text(2)});
+        SampleSegment g;
+        g.first_seq = static_cast<std::uint64_t>(st.column_int(0));
+        g.device_time_us = static_cast<std::uint64_t>(st.column_int(1));
+        g.started_at = st.column_text(2);
+        g.resolution_mm = st.column_opt_double(3);
+        g.reading_rate_hz = st.column_opt_double(4);
+        out.push_back(std::move(g));
     }
     return out;
+}
+
+std::size_t Store::set_segment_instrument(std::int64_t session_id, std::uint64_t from_seq, double resolution_mm,
+                                          double reading_rate_hz) {
+    if (!(resolution_mm > 0) || !(reading_rate_hz > 0))
+        throw StorageError(Kind::invalid, "a segment's resolution and reading rate must be > 0");
+    auto st = db_.prepare(
+        "UPDATE sample_segments SET resolution_mm = ?, reading_rate_hz = ? WHERE session_id = ? AND first_seq >= ?");
+    st.bind(1, resolution_mm).bind(2, reading_rate_hz).bind(3, session_id).bind(4, to_db(from_seq)).run();
+    return static_cast<std::size_t>(db_.changes());
+}
+
+std::optional<SampleSegment> Store::segment_of(std::int64_t session_id, std::uint64_t seq) {
+    std::optional<SampleSegment> found;
+    for (auto& g : sample_segments(session_id)) {
+        if (g.first_seq > seq) break;
+        found = std::move(g);
+    }
+    return found;
 }
 
 std::int64_t Store::find_session(std::string_view key) {

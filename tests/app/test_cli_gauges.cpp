@@ -89,6 +89,20 @@ TEST_P(GaugeCli, DemoRecoversTheInjectedErrors) {
     const auto& inst = j.at("instrument");
     EXPECT_NEAR(inst.at("reading_rate_hz").get<double>(), 20, 0.5);  // measured, on the gauge's clock
     EXPECT_NEAR(inst.at("resolution_mm").get<double>(), 1e-4, 1e-12);
+
+    // Resolution and measured rate are stored with every sample (through its segment), shown by sessions show.
+    const std::string id = std::to_string(j.at("session").get<int>());
+    const auto show = ballbar::test::run(dir, "sessions show " + id);
+    ASSERT_EQ(show.code, 0) << show.err;
+    EXPECT_NE(show.out.find(": resolution 0.1 µm, 20.0 readings/s measured"), std::string::npos) << show.out;
+    const auto js = ballbar::test::run(dir, "sessions show " + id + " --json");
+    ASSERT_EQ(js.code, 0) << js.err;
+    const auto segs = nlohmann::json::parse(js.out).at("sample_segments");
+    ASSERT_GE(segs.size(), 1u) << js.out;
+    for (const auto& g : segs) {
+        EXPECT_NEAR(g.at("resolution_mm").get<double>(), 1e-4, 1e-12) << js.out;
+        EXPECT_NEAR(g.at("reading_rate_hz").get<double>(), 20, 0.5) << js.out;
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Serial, GaugeCli, ::testing::Values("sylvac", "digimatic", "modbus"),

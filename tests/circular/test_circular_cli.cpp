@@ -107,4 +107,59 @@ TEST(CircularCli, PlanWritesBothDialectsAndChecksTravel) {
     EXPECT_NE(out.err.find("travel of X"), std::string::npos) << out.err;
 }
 
+// A slow gauge (issue 14): `--rate` refuses a feed whose samples lie too far apart along the path,
+// naming the highest usable feed; the feed-in (three samples on 1.5 mm: 0.5 mm) binds by default, the
+// cyclic-error pitch (two samples per 2 mm: 1 mm) with a long feed-in.
+TEST(CircularCli, PlanRefusesAFeedTooFastForTheReadingRate) {
+    TempDir dir;
+    const auto fast = run(dir, "circle plan --radius 100 --feed 1000 --rate 20");
+    EXPECT_EQ(fast.code, 2);
+    EXPECT_TRUE(fast.out.empty()) << "no program for a refused feed";
+    EXPECT_NE(fast.err.find("ballbar: error: --feed 1000 mm/min is too fast for 20 readings/s"), std::string::npos)
+        << fast.err;
+    EXPECT_NE(fast.err.find("0.8333 mm apart"), std::string::npos) << fast.err;
+    EXPECT_NE(fast.err.find("1.5 mm feed-in"), std::string::npos) << fast.err;
+    EXPECT_NE(fast.err.find("the highest usable feed is 600 mm/min"), std::string::npos) << fast.err;
+
+    const auto limit = run(dir, "circle plan --radius 100 --feed 600 --rate 20");
+    EXPECT_EQ(limit.code, 0) << limit.err;
+    EXPECT_NE(limit.out.find("G3 X"), std::string::npos);
+    EXPECT_NE(limit.err.find("the highest usable feed is 600 mm/min"), std::string::npos) << limit.err;
+    EXPECT_EQ(run(dir, "circle plan --feed 601 --rate 20").code, 2);
+    EXPECT_EQ(run(dir, "circle plan --feed 1000 --rate 33").code, 2);  // 990 mm/min at most
+    EXPECT_EQ(run(dir, "circle plan --feed 1000 --rate 34").code, 0);  // 1020 mm/min at most
+    EXPECT_EQ(run(dir, "circle plan --feed 1000").code, 0) << "no rate given: no check";
+
+    const auto pitch = run(dir, "circle plan --feed 1300 --feed-in 6 --rate 20");
+    EXPECT_EQ(pitch.code, 2);
+    EXPECT_NE(pitch.err.find("2 mm cyclic-error pitch"), std::string::npos) << pitch.err;
+    EXPECT_NE(pitch.err.find("the highest usable feed is 1200 mm/min"), std::string::npos) << pitch.err;
+
+    for (const char* bad : {"0", "-5", "abc"}) {
+        const auto r = run(dir, std::string("circle plan --rate ") + bad);
+        EXPECT_EQ(r.code, 2) << bad;
+        EXPECT_NE(r.err.find("--rate"), std::string::npos) << bad << ": " << r.err;
+    }
+}
+
+// The highest usable feed really is usable: a 20 readings/s trace at 600 mm/min is analysed, both runs
+// found, the injected backlash recovered.
+TEST(CircularCli, TheHighestUsableFeedOfASlowGaugeIsAnalysed) {
+    TempDir dir;
+    std::mt19937_64 rng(7);
+    GenSpec s;
+    s.radius_mm = 100.0, s.feed_mm_min = 600.0, s.sample_hz = 20.0, s.noise_um = 0.2;
+    s.runs = {{true, 0, 45, 360}, {false, 90, 45, 360}};
+    GenEffects fx;
+    fx.backlash_um = {8.0, 5.0};
+    const std::string path = dir.file("slow.csv");
+    std::ofstream(path) << to_file(s, generate(s, fx, rng));
+    const auto an = run(dir, "circle analyze '" + path + "' --json");
+    ASSERT_EQ(an.code, 0) << an.err;
+    const auto j = nlohmann::json::parse(an.out);
+    ASSERT_EQ(j["runs"].size(), 2u);
+    EXPECT_NEAR(j["diagnostics"]["backlash_x_um"].get<double>(), 8.0, 1.6);
+    EXPECT_NEAR(j["diagnostics"]["backlash_y_um"].get<double>(), 5.0, 1.0);
+}
+
 }  // namespace

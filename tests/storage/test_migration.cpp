@@ -42,6 +42,99 @@ INSERT INTO results(id, session_id, kind, payload_json, producer, created_at) VA
     db.exec("COMMIT");
 }
 
+// A database exactly as schema v3 left it: session 1 measured on a gauge (two segments: a connection
+// and a resume), its resolution and rate written once as the `instrument` result (v3's way); session 2
+// on the project's instrument (no instrument result); a stray non-JSON instrument result on session 2.
+void make_v3(const std::string& path) {
+    Database db(path);
+    db.exec("BEGIN");
+    for (int v = 0; v < 3; ++v) db.exec(detail::kMigrations[static_cast<std::size_t>(v)]);
+    db.exec("PRAGMA user_version = 3");
+    db.exec("PRAGMA application_id = " + std::to_string(Store::kApplicationId));
+    db.exec(R"sql(
+INSERT INTO machines(id, name, type, geometry_json) VALUES (1, 'm', 'TTTRR', '{"type":"TTTRR"}');
+INSERT INTO sessions(id, uuid, machine_id, source, state, started_at) VALUES
+  (1, '33333333-3333-4333-8333-333333333331', 1, 'device', 'completed', '2026-11-01T10:00:00.000Z'),
+  (2, '33333333-3333-4333-8333-333333333332', 1, 'device', 'completed', '2026-11-01T11:00:00.000Z');
+INSERT INTO samples(session_id, seq, device_time_us, displacement_nm, flags, bar_temp_mC) VALUES
+  (1, 0, 1000, 10, 0, 20000), (1, 1, 51000, 11, 0, 20000), (1, 2, 101000, 12, 0, 20000),
+  (1, 3, 5000, 13, 0, 20000), (1, 4, 55000, 14, 0, 20000),
+  (2, 0, 0, 1, 0, 20000), (2, 1, 1000, 2, 0, 20000);
+INSERT INTO sample_segments(session_id, first_seq, device_time_us, started_at) VALUES
+  (1, 0, 1000, '2026-11-01T10:00:01.000Z'), (1, 3, 5000, '2026-11-01T10:30:00.000Z'),
+  (2, 0, 0, '2026-11-01T11:00:01.000Z');
+INSERT INTO results(id, session_id, kind, payload_json, producer, created_at) VALUES
+  (1, 1, 'instrument', '{"kind":"sylvac","resolution_mm":0.001,"reading_rate_hz":19.8}', 'ballbar gauge/1',
+   '2026-11-01T10:40:00.000Z'),
+  (2, 2, 'instrument', 'not json', 'someone else', '2026-11-01T11:10:00.000Z');
+)sql");
+    db.exec("COMMIT");
+}
+
+TEST(Migration, V3GaugeSessionsGetTheirResolutionAndRateOnEverySample) {
+    TempDir dir;
+    const std::string path = dir.file("v3.db");
+    make_v3(path);
+    Store store(path);
+    EXPECT_EQ(store.db().query_int("PRAGMA user_version"), Store::kSchemaVersion);
+    EXPECT_EQ(store.integrity_check(), "ok");
+
+    const auto segs = store.sample_segments(1);
+    ASSERT_EQ(segs.size(), 2u);
+    for (const auto& g : segs) {
+        ASSERT_TRUE(g.resolution_mm && g.reading_rate_hz);
+        EXPECT_DOUBLE_EQ(*g.resolution_mm, 0.001);
+        EXPECT_DOUBLE_EQ(*g.reading_rate_hz, 19.8);
+    }
+    EXPECT_EQ(segs[1].started_at, "2026-11-01T10:30:00.000Z") << "the v3 columns are kept";
+    for (std::uint64_t seq = 0; seq < 5; ++seq) {
+        const auto g = store.segment_of(1, seq);
+        ASSERT_TRUE(g) << seq;
+        EXPECT_EQ(g->first_seq, seq < 3 ? 0u : 3u) << seq;
+        EXPECT_DOUBLE_EQ(g->resolution_mm.value_or(0), 0.001) << seq;
+    }
+    // Per sample in SQL, through the view.
+    auto st = store.db().prepare(
+        "SELECT seq, segment_first_seq, resolution_mm, reading_rate_hz FROM sample_instruments WHERE session_id = 1 "
+        "ORDER BY seq");
+    int rows = 0;
+    while (st.step()) {
+        EXPECT_EQ(st.column_int(1), st.column_int(0) < 3 ? 0 : 3);
+        EXPECT_DOUBLE_EQ(st.column_double(2), 0.001);
+        EXPECT_DOUBLE_EQ(st.column_double(3), 19.8);
+        ++rows;
+    }
+    EXPECT_EQ(rows, 5);
+
+    // Not a gauge's session (its instrument result unreadable): not known, rather than guessed.
+    const auto other = store.segment_of(2, 1);
+    ASSERT_TRUE(other);
+    EXPECT_FALSE(other->resolution_mm);
+    EXPECT_FALSE(other->reading_rate_hz);
+    EXPECT_EQ(store.results(2).size(), 1u) << "the migration changes no result";
+
+    // The migrated file takes new figures.
+    EXPECT_EQ(store.set_segment_instrument(2, 0, 1e-4, 40.0), 1u);
+    EXPECT_DOUBLE_EQ(store.segment_of(2, 1)->reading_rate_hz.value_or(0), 40.0);
+}
+
+TEST(Migration, V3OpenedReadOnlyReadsSegmentsWithoutTheInstrumentFigures) {
+    TempDir dir;
+    const std::string path = dir.file("v3ro.db");
+    make_v3(path);
+    {
+        StoreOptions ro;
+        ro.read_only = true;
+        Store store(path, ro);
+        EXPECT_EQ(store.schema_version(), 3);
+        const auto segs = store.sample_segments(1);
+        ASSERT_EQ(segs.size(), 2u);
+        EXPECT_FALSE(segs[0].resolution_mm);
+    }
+    Database db(path);
+    EXPECT_EQ(db.query_int("PRAGMA user_version"), 3) << "a read-only open migrates nothing";
+}
+
 TEST(Migration, V1ProcedureStepsMoveIntoTheTransitionsTable) {
     TempDir dir;
     const std::string path = dir.file("v1.db");

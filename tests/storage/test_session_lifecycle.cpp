@@ -256,7 +256,7 @@ INSERT INTO session_transitions(session_id, from_state, to_state, event, at, sco
         db.exec("COMMIT");
     }
     Store store(path);
-    EXPECT_EQ(store.db().query_int("PRAGMA user_version"), 3);
+    EXPECT_EQ(store.db().query_int("PRAGMA user_version"), Store::kSchemaVersion);
     EXPECT_EQ(store.integrity_check(), "ok");
     EXPECT_TRUE(store.sample_segments(1).empty());
     EXPECT_EQ(store.sample_count(1), 600);

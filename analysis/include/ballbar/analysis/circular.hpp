@@ -144,6 +144,21 @@ struct AnalysisOptions {
     double min_independence = 0.05;  ///< below this a signature counts as not separable
 };
 
+/// How coarsely a test may be sampled (docs/circular.md, "Sample spacing"). Samples lie F / (60 · rate)
+/// mm apart along the path at feed F. The diagnosis needs (1) two samples per shortest cyclic-error
+/// pitch it searches (`min_pitch_mm`: the sampling theorem along an axis, which never moves faster than
+/// the path) and (2) three samples on each radial feed-in (`feed_in_mm` at the feed), which the run
+/// finder fits with a three-parameter lagged ramp to find where the data arc starts.
+struct SamplingLimit {
+    double max_spacing_mm = 0.0;   ///< the coarsest usable spacing along the path
+    double max_feed_mm_min = 0.0;  ///< the highest usable feed at the rate
+    const char* binding = "";      ///< which need sets it: "cyclic-error pitch" or "feed-in"
+};
+inline constexpr double kSamplesPerMinPitch = 2.0;
+inline constexpr double kSamplesPerFeedIn = 3.0;
+/// The limit for `test` (its feed-in) at `sample_rate_hz` (> 0).
+SamplingLimit sampling_limit(const TestSpec& test, double sample_rate_hz, const AnalysisOptions& options = {});
+
 /// The whole analysis. Samples in time order (strictly increasing). Throws CircularError.
 CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSample>& samples,
                                 const AnalysisOptions& options = {});

@@ -95,6 +95,10 @@ struct SampleSegment {
     std::uint64_t first_seq = 0;
     std::uint64_t device_time_us = 0;  ///< of its first sample
     std::string started_at;            ///< the Store's clock when the writer took that sample (ISO 8601)
+    /// The instrument over this segment's samples (schema v4; empty: not known): its resolution (the
+    /// finest step it reports) and the reading rate actually measured.
+    std::optional<double> resolution_mm;
+    std::optional<double> reading_rate_hz;
 };
 
 /// One entry of a session's audit trail.
@@ -163,7 +167,7 @@ struct StoreOptions {
 
 class Store {
   public:
-    static constexpr int kSchemaVersion = 3;
+    static constexpr int kSchemaVersion = 4;
     static constexpr std::int64_t kApplicationId = 0x42424152;  // "BBAR"
 
     /// Opens or creates the database at `path` and migrates it to kSchemaVersion. Throws StorageError:
@@ -225,6 +229,13 @@ class Store {
     void add_sample_segment(std::int64_t session_id, const SampleSegment& segment);
     /// The session's segments in seq order; empty for sessions stored before schema v3 (and imported ones).
     std::vector<SampleSegment> sample_segments(std::int64_t session_id);
+    /// Sets the instrument's resolution and measured reading rate on the session's segments that start
+    /// at `from_seq` or later (the ones a connection or a resume wrote); returns how many it set.
+    std::size_t set_segment_instrument(std::int64_t session_id, std::uint64_t from_seq, double resolution_mm,
+                                       double reading_rate_hz);
+    /// The segment sample `seq` belongs to (the last one starting at or before it), with its instrument
+    /// figures: per-sample resolution and rate. Empty when the session records no segment before it.
+    std::optional<SampleSegment> segment_of(std::int64_t session_id, std::uint64_t seq);
     /// Calls `fn` for every sample in order, without holding them all in memory.
     void for_each_sample(std::int64_t session_id, const std::function<void(const analysis::BarSample&)>& fn);
 
