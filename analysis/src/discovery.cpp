@@ -9,7 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <numeric>
+#include <utility>
 
 #include "ballbar/analysis/kinematics.hpp"
 #include "discovery_search.hpp"
@@ -671,10 +671,11 @@ VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::Ma
     const Eigen::Index n = residual_mm.size();
     if (v == ExplainingVariable::bar_direction || n == 0) return t;
     const auto col = static_cast<Eigen::Index>(v);
-    std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
-    std::iota(order.begin(), order.end(), Eigen::Index{0});
-    std::stable_sort(order.begin(), order.end(),
-                     [&](Eigen::Index a, Eigen::Index b) { return variables(a, col) < variables(b, col); });
+    // The readings in order of the variable, ties in reading order (a stable sort): sorting (value,
+    // index) pairs gives that order without the indirect comparisons.
+    std::vector<std::pair<double, Eigen::Index>> order(static_cast<std::size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = {variables(i, col), i};
+    std::sort(order.begin(), order.end());
     constexpr int kBins = 8;
     for (int b = 0; b < kBins; ++b) {
         const std::size_t lo = order.size() * static_cast<std::size_t>(b) / kBins;
@@ -682,8 +683,8 @@ VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::Ma
         if (hi <= lo) continue;
         double sv = 0, sr = 0;
         for (std::size_t i = lo; i < hi; ++i) {
-            sv += variables(order[i], col);
-            sr += residual_mm[order[i]];
+            sv += order[i].first;
+            sr += residual_mm[order[i].second];
         }
         const auto cnt = static_cast<double>(hi - lo);
         t.bin_centre.push_back(sv / cnt);

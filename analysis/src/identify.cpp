@@ -263,22 +263,29 @@ FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
     // Levenberg–Marquardt on unit-scaled columns. The Jacobian is re-evaluated only when the linear
     // model stops predicting the cost reduction (|1 − ρ| > 1e-3) or a step fails: with errors of a
     // few µm on 100 mm bars the model is linear to ~1e-4, so one evaluation usually serves the fit.
-    Eigen::MatrixXd jac = select(jac_full);
+    // The unit-scaled Jacobian and its normal matrix change only with the Jacobian: they are formed
+    // once per evaluation, not per iteration (the n × m product is most of an iteration's cost).
+    Eigen::VectorXd scale;
+    Eigen::MatrixXd js, a;
+    auto set_jacobian = [&](const Eigen::MatrixXd& jac) {
+        scale = jac.colwise().norm().transpose();
+        for (Eigen::Index k = 0; k < m; ++k)
+            if (!(scale[k] > 0)) scale[k] = 1;
+        js = jac * scale.cwiseInverse().asDiagonal();
+        a = js.transpose() * js;
+    };
+    set_jacobian(select(jac_full));
+    jac_full.resize(0, 0);
     out.jacobian_evaluations = 1;
     bool jac_current = true;  // evaluated at the current estimate
     double lambda = 1e-6;
     out.message = "iteration limit reached";
     auto refresh = [&] {
-        jac = select(reading_jacobian(readings, e, opt.free_params, offsets, opt.fit_socket_offsets));
+        set_jacobian(select(reading_jacobian(readings, e, opt.free_params, offsets, opt.fit_socket_offsets)));
         jac_current = true;
         ++out.jacobian_evaluations;
     };
     for (out.iterations = 1; out.iterations <= opt.max_iterations && m > 0; ++out.iterations) {
-        Eigen::VectorXd scale = jac.colwise().norm().transpose();
-        for (Eigen::Index k = 0; k < m; ++k)
-            if (!(scale[k] > 0)) scale[k] = 1;
-        const Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
-        const Eigen::MatrixXd a = js.transpose() * js;
         const Eigen::VectorXd g = js.transpose() * r;
         // A step changing the predictions by less than this is statistically nothing.
         const double negligible =
@@ -361,9 +368,6 @@ FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
     out.residual_sigma_mm = std::sqrt(sigma2);
     out.correlation = Eigen::MatrixXd::Identity(m, m);
     if (m > 0) {
-        Eigen::VectorXd scale = jac.colwise().norm().transpose();
-        const Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
-        const Eigen::MatrixXd a = js.transpose() * js;
         const Eigen::MatrixXd ainv = a.ldlt().solve(Eigen::MatrixXd::Identity(m, m));
         for (Eigen::Index j = 0; j < m; ++j) {
             auto& pe = out.estimates[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
