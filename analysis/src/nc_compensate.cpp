@@ -20,7 +20,7 @@ void append_general(std::string& out, char letter, double value) {
     buf[1] = letter;
     const auto res = std::to_chars(buf + 2, buf + sizeof buf, value, std::chars_format::general, 10);
     if (res.ec != std::errc()) throw AnalysisError("NC program: value out of range");
-    out.append(buf, res.ptr);
+    out.append(buf, static_cast<std::size_t>(res.ptr - buf));
 }
 
 inline Vec3 rx(double a, const Vec3& v) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 
 namespace ballbar::analysis {
 namespace {
@@ -136,8 +137,13 @@ bool fixed_digits(double value, int decimals, std::uint64_t& int_part, std::uint
         const Uint128 rem = p - (n << s), half = Uint128{1} << (s - 1);
         if (rem > half || (rem == half && (n & 1) != 0)) ++n;
     }
-    int_part = static_cast<std::uint64_t>(n / scale);
-    frac_part = static_cast<std::uint64_t>(n % scale);
+    if (n > std::numeric_limits<std::uint64_t>::max()) {
+        int_part = static_cast<std::uint64_t>(n / scale);
+        frac_part = static_cast<std::uint64_t>(n % scale);
+    } else {  // NC words: a 64-bit division
+        int_part = static_cast<std::uint64_t>(n) / scale;
+        frac_part = static_cast<std::uint64_t>(n) % scale;
+    }
     return true;
 }
 
@@ -162,7 +168,7 @@ void append_nc_number(std::string& out, char letter, double value, int decimals)
         if (res.ec != std::errc()) throw AnalysisError("NC program: axis value out of range");
         p = res.ptr;
     }
-    out.append(buf, p);
+    out.append(buf, static_cast<std::size_t>(p - buf));  // (pointer, length): the iterator pair goes through replace()
 }
 
 NcError::NcError(int line, const std::string& message)
