@@ -60,14 +60,17 @@ bool is_blank(char c) {
     return c == ' ' || c == '\t';
 }
 
-/// Reads one RFC 4180 record starting at the reader's position; quoted fields may span lines.
-std::vector<std::string> read_record(LineReader& in) {
+/// Reads one RFC 4180 record starting at the reader's position into `fields`; quoted fields may span
+/// lines. The strings of `fields` are reused (a file's records cost no allocation each).
+void read_record(LineReader& in, std::vector<std::string>& fields) {
     const int start_line = in.line();
-    std::vector<std::string> fields;
-    std::string field;
+    std::size_t count = 0;
     std::string_view line = in.next();
     std::size_t i = 0;
     while (true) {  // one field per iteration
+        if (count == fields.size()) fields.emplace_back();
+        std::string& field = fields[count++];
+        field.clear();
         while (i < line.size() && is_blank(line[i])) ++i;
         if (i < line.size() && line[i] == '"') {
             ++i;
@@ -100,15 +103,13 @@ std::vector<std::string> read_record(LineReader& in) {
             if (raw.find('"') != std::string_view::npos) {
                 throw ReadingsFileError(in.line() - 1, "a quote inside an unquoted field");
             }
-            field = std::string(trim(raw));
+            field.assign(trim(raw));
             i = end;
         }
-        fields.push_back(std::move(field));
-        field.clear();
         if (i >= line.size()) break;
         ++i;  // past the comma
     }
-    return fields;
+    fields.resize(count);
 }
 
 std::optional<double> parse_number(std::string_view s) {
@@ -282,7 +283,7 @@ ReadingsFile parse_readings(std::string_view text) {
             continue;
         }
         columns_line = lineno;
-        names = read_record(in);
+        read_record(in, names);
         break;
     }
     if (!h.machine) {
@@ -335,6 +336,7 @@ ReadingsFile parse_readings(std::string_view text) {
     }
 
     const auto rot = analysis::rotary_axes(out.set.machine.type);
+    std::vector<std::string> fields;
     while (!in.done()) {
         const int lineno = in.line();
         const std::string_view line = in.peek();
@@ -351,7 +353,7 @@ ReadingsFile parse_readings(std::string_view text) {
             }
             continue;
         }
-        const auto fields = read_record(in);
+        read_record(in, fields);
         if (fields.size() != names.size()) {
             throw ReadingsFileError(lineno, std::to_string(fields.size()) + " fields, but the column row has " +
                                                 std::to_string(names.size()));
@@ -429,7 +431,7 @@ ReadingsFile read_readings_file(const std::filesystem::path& path) {
     std::ostringstream buf;
     buf << in.rdbuf();
     if (in.bad()) throw ReadingsFileError(0, "cannot read " + path.string());
-    return parse_readings(buf.str());
+    return parse_readings(std::move(buf).str());  // the text itself, not a copy
 }
 
 }  // namespace ballbar::storage
