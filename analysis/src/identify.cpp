@@ -125,7 +125,8 @@ Eigen::VectorXd residuals(const ReadingSet& readings, const PreparedReadings& pr
         const Reading& rd = readings.readings[i];
         Vec3 socket = rd.socket_mm;
         if (!socket_offsets_mm.empty()) socket += socket_offsets_mm[static_cast<std::size_t>(prep.which[i])];
-        r[static_cast<Eigen::Index>(i)] = rd.measured_mm - model.predict(rd.pose, prep.trig[i], socket, conditions_of(rd));
+        r[static_cast<Eigen::Index>(i)] =
+            rd.measured_mm - model.predict(rd.pose, prep.trig[i], socket, conditions_of(rd));
     }
     return r;
 }

@@ -3,7 +3,8 @@
 
 #include <charconv>
 #include <cmath>
-#include <cstdint>
+
+#include "ballbar/analysis/decimal_text.hpp"
 
 namespace ballbar::analysis {
 namespace {
@@ -46,45 +47,15 @@ bool iequal(std::string_view a, std::string_view b) {
     throw NcError(line, std::string("unexpected character '") + c + "'");
 }
 
-/// digits[.digits] at s[i] as a double when both the digits (as an integer w ≤ 2^53) and 10^k (k
-/// decimals ≤ 22) are exact doubles: then w / 10^k, one correctly rounded division, is the correctly
-/// rounded value from_chars gives (Clinger's fast path), at a fraction of its cost. False otherwise
-/// (more digits, a second point, a point without digits after it): from_chars reads those.
-bool exact_decimal(std::string_view s, std::size_t& i, double& v) {
-    static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-                                        1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-    constexpr std::uint64_t kExact = std::uint64_t{1} << 53;
-    auto digit = [&s](std::size_t k) { return k < s.size() && s[k] >= '0' && s[k] <= '9'; };
-    std::size_t k = i;
-    std::uint64_t w = 0;
-    int decimals = 0;
-    for (; digit(k); ++k) {
-        if (w >= kExact / 10) return false;  // w·10 + d may pass 2^53
-        w = w * 10 + static_cast<std::uint64_t>(s[k] - '0');
-    }
-    if (k < s.size() && s[k] == '.') {
-        if (!digit(++k)) return false;
-        for (; digit(k); ++k, ++decimals) {
-            if (w >= kExact / 10 || decimals == 22) return false;
-            w = w * 10 + static_cast<std::uint64_t>(s[k] - '0');
-        }
-    }
-    if (k < s.size() && s[k] == '.') return false;
-    v = static_cast<double>(w) / kPow10[decimals];
-    i = k;
-    return true;
-}
-
 /// A number after a word letter: [+-]digits[.digits] (no exponent, no nan/inf: NC has none).
 double number(std::string_view s, std::size_t& i, int line, char letter) {
     const std::size_t start = i;
     if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
-    // The common case, a digit first: the exact fast path, else from_chars (no exponent) in one pass.
-    // It is the number below when it ends where the run of digits and points does (a second point:
-    // malformed).
+    // The common case, a digit first: the exact fast path (decimal_text.hpp), else from_chars (no exponent) in one
+    // pass. It is the number below when it ends where the run of digits and points does (a second point: malformed).
     if (i < s.size() && s[i] >= '0' && s[i] <= '9') {
         double v = 0;
-        if (std::size_t k = i; exact_decimal(s, k, v) && v <= kMaxWord) {
+        if (std::size_t k = i; read_short_decimal(s, k, v) && v <= kMaxWord) {
             i = k;
             return s[start] == '-' ? -v : v;
         }

@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 
+#include "ballbar/analysis/decimal_text.hpp"
 #include "ballbar/analysis/kinematics.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
@@ -116,6 +117,10 @@ std::optional<double> parse_number(std::string_view s) {
     if (!s.empty() && s.front() == '+') s.remove_prefix(1);
     if (s.empty()) return std::nullopt;
     double v = 0;
+    const bool negative = s.front() == '-';
+    // Most fields are short decimals: the exact fast path (from_chars' value, bit for bit).
+    if (std::size_t pos = negative ? 1 : 0; analysis::read_short_decimal(s, pos, v) && pos == s.size())
+        return negative ? -v : v;
     const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     if (ec != std::errc() || ptr != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
     return v;

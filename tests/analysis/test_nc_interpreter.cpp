@@ -153,9 +153,20 @@ namespace {
 // std::from_chars gives for every form: many digits, many decimals, leading zeros, a point first.
 TEST(NcInterpreter, NumbersAreReadAsFromCharsReadsThem) {
     std::mt19937_64 rng(5);
-    std::vector<std::string> texts{"0", "-0", "+0.0", "000123.4500", ".5", "-.25", "7.", "1234567.89012345",
-                                   "999999999", "0.1", "0.30000000000000004", "900719925.4740993",
-                                   "123456789.0123456789012345", "0.0000000000000000000000001"};
+    std::vector<std::string> texts{"0",
+                                   "-0",
+                                   "+0.0",
+                                   "000123.4500",
+                                   ".5",
+                                   "-.25",
+                                   "7.",
+                                   "1234567.89012345",
+                                   "999999999",
+                                   "0.1",
+                                   "0.30000000000000004",
+                                   "900719925.4740993",
+                                   "123456789.0123456789012345",
+                                   "0.0000000000000000000000001"};
     for (int i = 0; i < 3000; ++i) {
         const int digits = 1 + static_cast<int>(rng() % 9);
         const int decimals = static_cast<int>(rng() % 24);

@@ -178,9 +178,24 @@ TEST(NcProgram, WritesFixedDecimalsLikePrintf) {
 // ties (k / 2^j, exactly halfway at some decimal) and signed zeros included.
 TEST(NcProgram, NumbersAreTheTextOfToCharsFixed) {
     std::mt19937_64 rng(17);
-    std::vector<double> values{0.0, -0.0, 0.5, -0.5, 1.5, 2.5, 0.03125, -0.03125, 1e-300, -4e-5, 5e-5, 1e300,
-                               std::numeric_limits<double>::denorm_min(), 9007199254740993.0, 9.3e18, 1e19,
-                               std::numeric_limits<double>::infinity(), std::nan("")};
+    std::vector<double> values{0.0,
+                               -0.0,
+                               0.5,
+                               -0.5,
+                               1.5,
+                               2.5,
+                               0.03125,
+                               -0.03125,
+                               1e-300,
+                               -4e-5,
+                               5e-5,
+                               1e300,
+                               std::numeric_limits<double>::denorm_min(),
+                               9007199254740993.0,
+                               9.3e18,
+                               1e19,
+                               std::numeric_limits<double>::infinity(),
+                               std::nan("")};
     std::uniform_real_distribution<double> nc(-2000.0, 2000.0);
     std::uniform_int_distribution<int> exponent(-40, 70);
     for (int i = 0; i < 20000; ++i) {
