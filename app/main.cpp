@@ -1,5 +1,4 @@
 // SPDX-License-Identifier: MIT
-#include <malloc.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -123,11 +122,6 @@ std::optional<std::string> unknown_command(const CLI::App& root, int argc, char*
 
 int main(int argc, char** argv) {
     using namespace ballbar::app;
-    // The analyses allocate matrices of ~40 MB (100,000 readings × 50 columns) again and again: above
-    // glibc's largest automatic mmap threshold (32 MB) each is mapped, faulted in page by page and
-    // unmapped. Kept in the heap, freed blocks are reused (half the page faults of `discover`).
-    mallopt(M_MMAP_THRESHOLD, 512 << 20);
-    mallopt(M_TRIM_THRESHOLD, 1 << 30);
     CLI::App root{"ballbar: guided ball-bar measurement and error analysis of five-axis machine tools", "ballbar"};
     root.set_version_flag("--version", std::string("ballbar ") + ballbar::kVersion);
     root.require_subcommand(1);
