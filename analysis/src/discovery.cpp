@@ -6,10 +6,11 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <numeric>
+#include <utility>
 
 #include "ballbar/analysis/kinematics.hpp"
 #include "discovery_search.hpp"
@@ -272,6 +273,24 @@ ExplainingVariable best_variable(const Eigen::VectorXd& r, const Eigen::MatrixXd
 
 namespace {
 
+/// The readings in order of each explaining variable, ties in reading order (what a stable sort
+/// gives), sorted on first use: the variables do not change during a discovery run, whose residual
+/// analyses would otherwise sort every reading twenty times.
+class VariableOrders {
+  public:
+    explicit VariableOrders(const Eigen::MatrixXd& variables) : variables_(&variables) {}
+    const std::vector<Eigen::Index>& of(ExplainingVariable v);
+
+  private:
+    const Eigen::MatrixXd* variables_;
+    std::array<std::vector<Eigen::Index>, kExplainingVariableCount> orders_;
+};
+
+VariableTrend trend_of(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables, ExplainingVariable v,
+                       VariableOrders& orders);
+ResidualAnalysis analyse_with(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables,
+                              VariableOrders& orders);
+
 /// The learned terms of the workflow: their values, raw and unit columns (appended to the context's
 /// Jacobian), and the readings with their contribution taken off (what the library fit sees).
 struct Learned {
@@ -379,7 +398,8 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
 
     Eigen::VectorXd r = residuals_of(readings, fit);
     out.rms_initial_mm = fit.residual_rms_mm;
-    out.initial_residuals = analyse_residuals(r, ctx.variables);
+    VariableOrders orders(ctx.variables);
+    out.initial_residuals = analyse_with(r, ctx.variables, orders);
 
     Learned learned;
     const ReadingSet* data = &readings;  // the readings the fits see (learned terms taken off)
@@ -489,8 +509,8 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
             st.value = (rss - rss_new) / std::max(rss_new / std::max(dof_new, 1.0), 1e-300);
             st.p_value = f_distribution_sf(st.value, 1.0, std::max(dof_new, 1.0));
             st.explained_by = best_variable(r - r_new, ctx.variables);
-            st.trend_before = residual_trend(r, ctx.variables, st.explained_by);
-            st.trend_after = residual_trend(r_new, ctx.variables, st.explained_by);
+            st.trend_before = trend_of(r, ctx.variables, st.explained_by, orders);
+            st.trend_after = trend_of(r_new, ctx.variables, st.explained_by, orders);
             st.model_after = refit.model;
             st.candidates = sc.scores;
             std::sort(st.candidates.begin(), st.candidates.end(),
@@ -602,7 +622,7 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
         }
     out.final_model = model;
     out.rms_final_mm = std::sqrt(r.squaredNorm() / static_cast<double>(n));
-    out.final_residuals = analyse_residuals(r, ctx.variables);
+    out.final_residuals = analyse_with(r, ctx.variables, orders);
     char text[300];
     std::snprintf(text, sizeof text,
                   "F-test per added parameter at a family-wise false-alarm rate of %g per step (Bonferroni), "
@@ -659,10 +679,22 @@ double explained_r2(const Eigen::VectorXd& r, const Eigen::MatrixXd& vars, Expla
     return std::clamp(b.dot(inv * b) / total, 0.0, 1.0);
 }
 
-}  // namespace
+const std::vector<Eigen::Index>& VariableOrders::of(ExplainingVariable v) {
+    std::vector<Eigen::Index>& order = orders_[static_cast<std::size_t>(v)];
+    const Eigen::Index n = variables_->rows();
+    if (static_cast<Eigen::Index>(order.size()) == n) return order;
+    // Sorting (value, index) pairs gives the stable order without indirect comparisons.
+    const auto col = static_cast<Eigen::Index>(v);
+    std::vector<std::pair<double, Eigen::Index>> pairs(static_cast<std::size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i) pairs[static_cast<std::size_t>(i)] = {(*variables_)(i, col), i};
+    std::sort(pairs.begin(), pairs.end());
+    order.resize(pairs.size());
+    for (std::size_t i = 0; i < pairs.size(); ++i) order[i] = pairs[i].second;
+    return order;
+}
 
-VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables,
-                             ExplainingVariable v) {
+VariableTrend trend_of(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables, ExplainingVariable v,
+                       VariableOrders& orders) {
     if (variables.rows() != residual_mm.size())
         throw AnalysisError("residual analysis: one row of variables per residual is needed");
     VariableTrend t;
@@ -671,10 +703,7 @@ VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::Ma
     const Eigen::Index n = residual_mm.size();
     if (v == ExplainingVariable::bar_direction || n == 0) return t;
     const auto col = static_cast<Eigen::Index>(v);
-    std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
-    std::iota(order.begin(), order.end(), Eigen::Index{0});
-    std::stable_sort(order.begin(), order.end(),
-                     [&](Eigen::Index a, Eigen::Index b) { return variables(a, col) < variables(b, col); });
+    const std::vector<Eigen::Index>& order = orders.of(v);
     constexpr int kBins = 8;
     for (int b = 0; b < kBins; ++b) {
         const std::size_t lo = order.size() * static_cast<std::size_t>(b) / kBins;
@@ -693,7 +722,8 @@ VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::Ma
     return t;
 }
 
-ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables) {
+ResidualAnalysis analyse_with(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables,
+                              VariableOrders& orders) {
     if (variables.rows() != residual_mm.size())
         throw AnalysisError("residual analysis: one row of variables per residual is needed");
     ResidualAnalysis out;
@@ -702,13 +732,26 @@ ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eig
     out.rms_mm = n > 0 ? std::sqrt(residual_mm.squaredNorm() / static_cast<double>(n)) : 0.0;
     double best = -1;
     for (std::size_t k = 0; k < kExplainingVariableCount; ++k) {
-        out.trends[k] = residual_trend(residual_mm, variables, static_cast<ExplainingVariable>(k));
+        out.trends[k] = trend_of(residual_mm, variables, static_cast<ExplainingVariable>(k), orders);
         if (out.trends[k].r2 > best) {
             best = out.trends[k].r2;
             out.best = out.trends[k].variable;
         }
     }
     return out;
+}
+
+}  // namespace
+
+VariableTrend residual_trend(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables,
+                             ExplainingVariable v) {
+    VariableOrders orders(variables);
+    return trend_of(residual_mm, variables, v, orders);
+}
+
+ResidualAnalysis analyse_residuals(const Eigen::VectorXd& residual_mm, const Eigen::MatrixXd& variables) {
+    VariableOrders orders(variables);
+    return analyse_with(residual_mm, variables, orders);
 }
 
 // ---- F distribution -------------------------------------------------------------------------------

@@ -4,6 +4,8 @@
 #include <charconv>
 #include <cmath>
 
+#include "ballbar/analysis/decimal_text.hpp"
+
 namespace ballbar::analysis {
 namespace {
 
@@ -49,6 +51,22 @@ bool iequal(std::string_view a, std::string_view b) {
 double number(std::string_view s, std::size_t& i, int line, char letter) {
     const std::size_t start = i;
     if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    // The common case, a digit first: the exact fast path (decimal_text.hpp), else from_chars (no exponent) in one
+    // pass. It is the number below when it ends where the run of digits and points does (a second point: malformed).
+    if (i < s.size() && s[i] >= '0' && s[i] <= '9') {
+        double v = 0;
+        if (std::size_t k = i; read_short_decimal(s, k, v) && v <= kMaxWord) {
+            i = k;
+            return s[start] == '-' ? -v : v;
+        }
+        const auto res = std::from_chars(s.data() + i, s.data() + s.size(), v, std::chars_format::fixed);
+        const auto end = static_cast<std::size_t>(res.ptr - s.data());
+        if (res.ec == std::errc() && (end == s.size() || !((s[end] >= '0' && s[end] <= '9') || s[end] == '.')) &&
+            std::isfinite(v) && std::abs(v) <= kMaxWord) {
+            i = end;
+            return s[start] == '-' ? -v : v;
+        }
+    }
     std::size_t digits = 0;
     while (i < s.size() && ((s[i] >= '0' && s[i] <= '9') || s[i] == '.')) {
         if (s[i] != '.') ++digits;

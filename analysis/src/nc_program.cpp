@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/analysis/nc_program.hpp"
 
+#include <bit>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 
 namespace ballbar::analysis {
 namespace {
@@ -102,18 +105,71 @@ NcMotion motion_for_g(double g, int line) {
     throw NcError(line, std::string("unsupported G code G") + num + " (ballbar runs G0, G1, G4 in G90/G21)");
 }
 
-/// Appends " <letter><value>" with `decimals` digits after the point (printf's %.Nf, without its locale
-/// and format-string cost: this runs for every axis word of a million-block program).
+/// Axis words carry 4 decimals (1e-4 mm, 1e-4 degree).
 void append_number(std::string& out, char letter, double value, int decimals = 4) {
-    char buf[352];  // the longest finite double in fixed notation fits
-    buf[0] = ' ';
-    buf[1] = letter;
-    const auto res = std::to_chars(buf + 2, buf + sizeof buf, value, std::chars_format::fixed, decimals);
-    if (res.ec != std::errc()) throw AnalysisError("NC program: axis value out of range");
-    out.append(buf, res.ptr);
+    append_nc_number(out, letter, value, decimals);
+}
+
+__extension__ typedef unsigned __int128 Uint128;  // GCC and Clang; -Wpedantic knows it as an extension
+
+/// The fixed-notation digits of |value| × 10^decimals, rounded to nearest with ties to even, from the
+/// exact binary value m·2^e: m·10^d fits 128 bits (m < 2^53, 10^8 < 2^27), so one multiplication and
+/// one shift give the quotient and the remainder that decides the rounding. False when |value| ≥ 2^63
+/// (or not finite): std::to_chars does those.
+bool fixed_digits(double value, int decimals, std::uint64_t& int_part, std::uint64_t& frac_part) {
+    static constexpr std::uint64_t kPow10[] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000};
+    if (decimals < 0 || decimals > 8) return false;
+    const auto bits = std::bit_cast<std::uint64_t>(value);
+    const auto biased = static_cast<int>((bits >> 52) & 0x7FF);
+    const std::uint64_t fraction = bits & ((std::uint64_t{1} << 52) - 1);
+    if (biased == 0x7FF) return false;  // inf, nan
+    const std::uint64_t m = biased == 0 ? fraction : fraction | (std::uint64_t{1} << 52);
+    const int e = (biased == 0 ? 1 : biased) - 1075;  // value = ±m·2^e
+    const std::uint64_t scale = kPow10[decimals];
+    Uint128 n = 0;  // round(|value| · 10^decimals)
+    if (e >= 0) {
+        if (e > 10) return false;  // m·2^e ≥ 2^63 possible
+        n = static_cast<Uint128>(m << e) * scale;
+    } else if (-e <= 80) {  // beyond, m·10^d < 2^80 is below half a unit: zero
+        const int s = -e;
+        const Uint128 p = static_cast<Uint128>(m) * scale;
+        n = p >> s;
+        const Uint128 rem = p - (n << s), half = Uint128{1} << (s - 1);
+        if (rem > half || (rem == half && (n & 1) != 0)) ++n;
+    }
+    if (n > std::numeric_limits<std::uint64_t>::max()) {
+        int_part = static_cast<std::uint64_t>(n / scale);
+        frac_part = static_cast<std::uint64_t>(n % scale);
+    } else {  // NC words: a 64-bit division
+        int_part = static_cast<std::uint64_t>(n) / scale;
+        frac_part = static_cast<std::uint64_t>(n) % scale;
+    }
+    return true;
 }
 
 }  // namespace
+
+void append_nc_number(std::string& out, char letter, double value, int decimals) {
+    char buf[352];  // the longest finite double in fixed notation fits
+    buf[0] = ' ';
+    buf[1] = letter;
+    char* p = buf + 2;
+    std::uint64_t int_part = 0, frac_part = 0;
+    if (fixed_digits(value, decimals, int_part, frac_part)) {
+        if (std::signbit(value)) *p++ = '-';
+        p = std::to_chars(p, buf + sizeof buf, int_part).ptr;
+        if (decimals > 0) {
+            *p++ = '.';
+            for (int k = decimals - 1; k >= 0; --k, frac_part /= 10) p[k] = static_cast<char>('0' + frac_part % 10);
+            p += decimals;
+        }
+    } else {
+        const auto res = std::to_chars(p, buf + sizeof buf, value, std::chars_format::fixed, decimals);
+        if (res.ec != std::errc()) throw AnalysisError("NC program: axis value out of range");
+        p = res.ptr;
+    }
+    out.append(buf, static_cast<std::size_t>(p - buf));  // (pointer, length): the iterator pair goes through replace()
+}
 
 NcError::NcError(int line, const std::string& message)
     : AnalysisError("line " + std::to_string(line) + ": " + message), line_(line) {}

@@ -5,8 +5,15 @@
 
 namespace ballbar::analysis {
 
-Mat3 ReadingModel::Axis::rotation(double angle_rad) const {
-    const double c0 = std::cos(angle_rad), s0 = std::sin(angle_rad);
+ReadingModel::RotaryTrig::RotaryTrig(const Pose& pose) {
+    const double angle[3] = {pose.A_rad, pose.B_rad, pose.C_rad};
+    for (std::size_t k = 0; k < 3; ++k) {
+        cos[k] = std::cos(angle[k]);
+        sin[k] = std::sin(angle[k]);
+    }
+}
+
+Mat3 ReadingModel::Axis::rotation(double c0, double s0) const {
     const double c = c0 * cos_zero - s0 * sin_zero;  // cos(angle + zero offset)
     const double s = s0 * cos_zero + c0 * sin_zero;
     return detail::rotation_about(dir, outer, c, s);
@@ -56,6 +63,12 @@ ReadingModel::ReadingModel(const MachineGeometry& geom, const ErrorParams& e) : 
 
 double ReadingModel::predict(const Pose& pose, const Vec3& socket_mm, const ReadingConditions& cond,
                              Gradient* grad) const {
+    return predict(pose, RotaryTrig(pose), socket_mm, cond, grad);
+}
+
+double ReadingModel::predict(const Pose& pose, const RotaryTrig& trig, const Vec3& socket_mm,
+                             const ReadingConditions& cond, Gradient* grad) const {
+    auto rotation = [&trig](const Axis& axis, std::size_t k) { return axis.rotation(trig.cos[k], trig.sin[k]); };
     const double hours = cond.time_s / 3600.0;
     Vec3 pivot = detail::linear_axes(e_, pose);
     pivot.z() += e_[Param::spindle_growth] * hours;
@@ -69,8 +82,8 @@ double ReadingModel::predict(const Pose& pose, const Vec3& socket_mm, const Read
             const Vec3 p0 = geom_.a_pivot_mm + geom_.c_offset_mm;
             const Vec3 qc = p0 + c_.offset;
             const Vec3 qa = geom_.a_pivot_mm + a_.offset;
-            r_inner = c_.rotation(pose.C_rad);
-            r_outer = a_.rotation(pose.A_rad);
+            r_inner = rotation(c_, 2);
+            r_outer = rotation(a_, 0);
             inner_in = p0 + socket_mm - qc;
             inner_out = r_inner * inner_in;
             outer_in = qc + inner_out - qa;
@@ -82,8 +95,8 @@ double ReadingModel::predict(const Pose& pose, const Vec3& socket_mm, const Read
         case MachineType::RRTTT: {  // head: B carried by A
             const Vec3 qb = pivot + b_.offset;
             const Vec3 qa = pivot + a_.offset;
-            r_inner = b_.rotation(pose.B_rad);
-            r_outer = a_.rotation(pose.A_rad);
+            r_inner = rotation(b_, 1);
+            r_outer = rotation(a_, 0);
             inner_in = pivot + tool_mm_ - qb;
             inner_out = r_inner * inner_in;
             outer_in = qb + inner_out - qa;
@@ -95,8 +108,8 @@ double ReadingModel::predict(const Pose& pose, const Vec3& socket_mm, const Read
         case MachineType::RTTTR: {  // A on the table, B in the head
             const Vec3 qb = pivot + b_.offset;
             const Vec3 qa = geom_.a_pivot_mm + a_.offset;
-            r_inner = b_.rotation(pose.B_rad);  // "inner": the head's only axis
-            r_outer = a_.rotation(pose.A_rad);  // "outer": the table's only axis
+            r_inner = rotation(b_, 1);  // "inner": the head's only axis
+            r_outer = rotation(a_, 0);  // "outer": the table's only axis
             inner_in = pivot + tool_mm_ - qb;
             inner_out = r_inner * inner_in;
             b = qb + inner_out;

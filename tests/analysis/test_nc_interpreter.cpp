@@ -2,7 +2,11 @@
 // The CAM interpreter: units, increments, arcs in three planes and both forms, modes and refusals.
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -138,6 +142,49 @@ TEST(NcInterpreter, RefusesWhatItCannotKnow) {
     } catch (const ba::NcError& e) {
         EXPECT_EQ(e.line(), 3);
         EXPECT_NE(std::string(e.what()).find("expand"), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+
+namespace {
+
+// The interpreter's number reading (an exact fast path for the common short numbers) gives what
+// std::from_chars gives for every form: many digits, many decimals, leading zeros, a point first.
+TEST(NcInterpreter, NumbersAreReadAsFromCharsReadsThem) {
+    std::mt19937_64 rng(5);
+    std::vector<std::string> texts{"0",
+                                   "-0",
+                                   "+0.0",
+                                   "000123.4500",
+                                   ".5",
+                                   "-.25",
+                                   "7.",
+                                   "1234567.89012345",
+                                   "999999999",
+                                   "0.1",
+                                   "0.30000000000000004",
+                                   "900719925.4740993",
+                                   "123456789.0123456789012345",
+                                   "0.0000000000000000000000001"};
+    for (int i = 0; i < 3000; ++i) {
+        const int digits = 1 + static_cast<int>(rng() % 9);
+        const int decimals = static_cast<int>(rng() % 24);
+        std::string t = rng() % 2 ? "-" : "";
+        for (int d = 0; d < digits; ++d) t += static_cast<char>('0' + rng() % 10);
+        if (decimals > 0) t += '.';
+        for (int d = 0; d < decimals; ++d) t += static_cast<char>('0' + rng() % 10);
+        texts.push_back(t);
+    }
+    for (const std::string& t : texts) {
+        const auto s = interpret("%\nG1 X" + t + " Y0 Z0 A0 C0 F100\nM30\n%\n");
+        ASSERT_EQ(s.size(), 1u) << t;
+        std::string body = t[0] == '-' || t[0] == '+' ? t.substr(1) : t;
+        if (body[0] == '.') body = "0" + body;
+        double v = 0;
+        std::from_chars(body.data(), body.data() + body.size(), v);
+        if (t[0] == '-') v = -v;
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(s[0].points[0].X_mm), std::bit_cast<std::uint64_t>(v)) << t;
     }
 }
 

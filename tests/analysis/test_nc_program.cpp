@@ -1,6 +1,13 @@
 // SPDX-License-Identifier: MIT
 #include <gtest/gtest.h>
 
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
 #include "ballbar/analysis/nc_program.hpp"
 
 namespace ba = ballbar::analysis;
@@ -165,4 +172,45 @@ TEST(NcProgram, WritesFixedDecimalsLikePrintf) {
     p.blocks = {b};
     const std::string out = ba::write_nc_program(p);
     EXPECT_NE(out.find("G1 X1.2346 Y-0.0000 Z123456.5000 F1500.0\n"), std::string::npos) << out;
+}
+
+// append_nc_number is std::to_chars(fixed) at a fraction of its cost: the same text for every value,
+// ties (k / 2^j, exactly halfway at some decimal) and signed zeros included.
+TEST(NcProgram, NumbersAreTheTextOfToCharsFixed) {
+    std::mt19937_64 rng(17);
+    std::vector<double> values{0.0,
+                               -0.0,
+                               0.5,
+                               -0.5,
+                               1.5,
+                               2.5,
+                               0.03125,
+                               -0.03125,
+                               1e-300,
+                               -4e-5,
+                               5e-5,
+                               1e300,
+                               std::numeric_limits<double>::denorm_min(),
+                               9007199254740993.0,
+                               9.3e18,
+                               1e19,
+                               std::numeric_limits<double>::infinity(),
+                               std::nan("")};
+    std::uniform_real_distribution<double> nc(-2000.0, 2000.0);
+    std::uniform_int_distribution<int> exponent(-40, 70);
+    for (int i = 0; i < 20000; ++i) {
+        values.push_back(nc(rng));
+        values.push_back(std::ldexp(nc(rng), exponent(rng)));
+        values.push_back(std::ldexp(static_cast<double>(static_cast<int>(nc(rng) * 1000)), -(i % 24)));  // ties
+    }
+    for (int decimals = 0; decimals <= 8; ++decimals)
+        for (double v : values) {
+            char buf[400];
+            buf[0] = ' ';
+            buf[1] = 'X';
+            const auto res = std::to_chars(buf + 2, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+            std::string out = "G1";
+            ba::append_nc_number(out, 'X', v, decimals);
+            ASSERT_EQ(out, "G1" + std::string(buf, res.ptr)) << v << " with " << decimals << " decimals";
+        }
 }

@@ -78,6 +78,12 @@ void write_nc_header(std::string& out, NcDialect dialect, std::string_view title
 void write_nc_block(std::string& out, const NcBlock& block, NcDialect dialect);
 void write_nc_footer(std::string& out, NcDialect dialect);
 
+/// Appends " <letter><value>" with `decimals` digits after the point: exactly the text of
+/// std::to_chars(value, std::chars_format::fixed, decimals) (the exact binary value rounded to
+/// nearest, ties to even; "-" on negative values, zero included), at a fraction of its cost for
+/// decimals in 0..8 and the magnitudes of NC words. Throws AnalysisError when it does not fit.
+void append_nc_number(std::string& out, char letter, double value, int decimals);
+
 /// The absolute commanded pose after `block` (the axes it does not name keep their `before` values).
 Pose pose_after(const NcBlock& block, const Pose& before);
 

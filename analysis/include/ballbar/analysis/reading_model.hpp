@@ -26,8 +26,18 @@ class ReadingModel {
         Vec3 socket_mm = Vec3::Zero();             ///< ∂reading/∂(socket position)
     };
 
+    /// cos and sin of a pose's rotary angles (A, B, C): they depend on the reading, not on the error
+    /// parameters, so a fit evaluating the model many times computes them once per reading.
+    struct RotaryTrig {
+        std::array<double, 3> cos{1, 1, 1}, sin{0, 0, 0};
+        explicit RotaryTrig(const Pose& pose);
+    };
+
     /// The predicted reading (mm); with `grad`, also its gradient.
     double predict(const Pose& pose, const Vec3& socket_mm, const ReadingConditions& cond,
+                   Gradient* grad = nullptr) const;
+    /// The same with the pose's RotaryTrig given (the same result, bit for bit).
+    double predict(const Pose& pose, const RotaryTrig& trig, const Vec3& socket_mm, const ReadingConditions& cond,
                    Gradient* grad = nullptr) const;
 
   private:
@@ -43,7 +53,7 @@ class ReadingModel {
         std::array<Param, 2> tilt{};  // the tilt errors, with their w
         std::array<Vec3, 2> w;
         Param zero{};
-        Mat3 rotation(double angle_rad) const;
+        Mat3 rotation(double cos_angle, double sin_angle) const;
         /// Adds g·u·∂p'/∂(this axis's parameters) to `grad`, p' = q + R(p − q), for a rotation
         /// that took p (relative to q: `rel_in`) to p' (`rel_out` = p' − q).
         void gradient(const Mat3& r, const Vec3& u, const Vec3& rel_in, const Vec3& rel_out, double g,
