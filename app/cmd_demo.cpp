@@ -6,8 +6,10 @@
 // total position and orientation errors next to the emulator's true values (docs/procedure.md).
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <iostream>
@@ -50,6 +52,7 @@ struct DemoOptions {
     std::string instrument;  ///< --instrument KIND: a digital gauge instead of the ballbar (gauge_demo.cpp)
     double gauge_rate_hz = 20;
     std::string faults;  ///< --faults SPEC
+    std::string plan;    ///< --plan FILE: a ballbar-plan/1 file instead of the default plan
 };
 
 /// Answers every question like the plan and drives the emulator's machine as its operator would: runs
@@ -57,13 +60,14 @@ struct DemoOptions {
 /// start at every program stop and moves the socket when the stop says so.
 class DemoOperator : public acq::ScriptedOperator {
   public:
-    DemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, bool show_progress, double start_delay_s,
-                 double feed_override)
+    DemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, bool show_progress,
+                 const device::FaultConfig& faults)
         : acq::ScriptedOperator(plan.spec.answers),
           machine_(machine),
           show_(show_progress),
-          start_delay_s_(start_delay_s),
-          feed_override_(feed_override) {}
+          start_delay_s_(faults.start_delay_s),
+          feed_override_(faults.feed_override),
+          answer_delay_s_(faults.answer_delay_s) {}
     void run_program(const ba::NcProgram& program, std::span<const std::size_t>, bool) override {
         machine_.stop(0);  // stops wherever it is now
         machine_.set_feed_override(feed_override_);
@@ -73,7 +77,8 @@ class DemoOperator : public acq::ScriptedOperator {
     }
     void program_stop(const acq::ProgramStop& stop) override {
         if (stop.socket_mm) machine_.set_socket_mm(*stop.socket_mm);
-        machine_.cycle_start(0);  // the rest runs once the machine stands at the stop
+        if (answer_delay_s_ > 0) machine_.dwell(answer_delay_s_);  // stands at the stop, then cycle start
+        machine_.cycle_start(0);                                   // the rest runs once the machine stands at the stop
     }
     void progress(const acq::Progress& p) override {
         if (!show_ || p.done == last_done_) return;
@@ -92,9 +97,67 @@ class DemoOperator : public acq::ScriptedOperator {
   private:
     device::SimulatedMachine& machine_;
     bool show_;
-    double start_delay_s_, feed_override_;
+    double start_delay_s_, feed_override_, answer_delay_s_;
     std::size_t last_done_ = static_cast<std::size_t>(-1);
 };
+
+/// What the emulator's truth says of a stored session: each stored point's window of samples is checked
+/// against where the emulated machine truly stood at each sample's time (pose and socket), and the
+/// stored stream for samples stored twice (the same device time).
+struct TruthCheck {
+    std::size_t points = 0;
+    std::size_t wrong_pose = 0;    ///< points with a window sample away from the point's planned pose
+    std::size_t stored_twice = 0;  ///< stored samples whose device time another stored sample has
+    std::size_t samples_stored = 0;
+    std::string first_wrong;  ///< the first wrong point, for the message
+};
+
+TruthCheck check_against_truth(storage::Store& store, std::int64_t id, const device::Emulator& emu) {
+    TruthCheck c;
+    const device::SimulatedMachine& m = emu.machine();
+    const auto samples = store.samples(id);
+    c.samples_stored = samples.size();
+    std::vector<std::uint64_t> times;
+    times.reserve(samples.size());
+    for (const auto& s : samples) times.push_back(s.device_time_us);
+    std::sort(times.begin(), times.end());
+    c.stored_twice = static_cast<std::size_t>(times.end() - std::unique(times.begin(), times.end()));
+    for (const auto& p : store.points(id)) {
+        ++c.points;
+        if (!p.first_seq || !p.last_seq || *p.last_seq < *p.first_seq || *p.last_seq >= samples.size()) {
+            ++c.wrong_pose;
+            continue;
+        }
+        const ba::Pose& want = p.reading.pose;
+        bool ok = true;
+        std::string why;
+        for (std::uint64_t q = *p.first_seq; q <= *p.last_seq && ok; ++q) {
+            const double t_s = static_cast<double>(samples[static_cast<std::size_t>(q)].device_time_us) * 1e-6;
+            const auto t = m.truth_at(t_s);
+            ok = t && (t->pose.linear_mm() - want.linear_mm()).norm() < 1e-4 &&
+                 std::abs(t->pose.A_rad - want.A_rad) < 1e-6 && std::abs(t->pose.B_rad - want.B_rad) < 1e-6 &&
+                 std::abs(t->pose.C_rad - want.C_rad) < 1e-6 && (t->socket_mm - p.reading.socket_mm).norm() < 1e-6;
+            if (!ok) {
+                std::ostringstream os;
+                os << "sample " << q << " at " << t_s << " s: ";
+                if (t)
+                    os << "the machine at X" << t->pose.X_mm << " Y" << t->pose.Y_mm << " Z" << t->pose.Z_mm
+                       << ", socket " << t->socket_mm.transpose() << "; planned X" << want.X_mm << " Y" << want.Y_mm
+                       << " Z" << want.Z_mm << ", socket " << p.reading.socket_mm.transpose();
+                else
+                    os << "a time the machine has not reached";
+                why = os.str();
+            }
+        }
+        if (!ok) {
+            ++c.wrong_pose;
+            if (c.first_wrong.empty())
+                c.first_wrong = "location " + std::to_string(p.reading.location) + " point " +
+                                std::to_string(p.reading.point) + ", " + why;
+        }
+    }
+    return c;
+}
 
 /// --faults SPEC: the emulator's "faults" object, inline JSON or a file holding it.
 device::FaultConfig parse_faults(const std::string& spec) {
@@ -130,9 +193,11 @@ class PtyEmulator {
             }
         });
     }
-    ~PtyEmulator() {
+    ~PtyEmulator() { halt(); }
+    /// Stops serving (the emulator's state can then be read without racing its thread).
+    void halt() {
         stop_ = true;
-        thread_.join();
+        if (thread_.joinable()) thread_.join();
     }
     /// The current pty (a new one after a simulated disconnect).
     std::string path() {
@@ -187,6 +252,14 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     if (!type) throw CliError(kExitUsage, "--machine must be RRTTT, TTTRR or RTTTR");
     const acq::MachineFile machine = acq::seed_machine(*type);
     acq::PlanSpec spec = acq::default_plan(machine);
+    if (!o.plan.empty()) {
+        try {
+            spec = acq::parse_plan_file(read_file(o.plan, "plan file"), machine.geometry.type);
+        } catch (const acq::PlanError& e) {
+            throw CliError(kExitUsage, o.plan + ": " + e.what());
+        }
+        spec.answers.on_point_failure = acq::PointFailureAction::Retry;  // the demo's operator never gives up
+    }
     spec.answers.operator_name = "demo";
     const acq::Plan plan = acq::make_plan(machine, spec);
 
@@ -194,12 +267,16 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     cfg.seed = o.seed;
     cfg.instrument.calibrated_length_mm = spec.bar_length_mm;
     cfg.instrument.noise_um = 0.1;
+    // A serial of this process's own: demos running side by side each reconnect to their own emulator
+    // (a pty name can be reused by another one's after a simulated disconnect).
+    cfg.instrument.serial = "EMU" + std::to_string(10000 + ::getpid() % 90000);
     cfg.machine.geometry = machine.geometry;
     cfg.machine.errors = acq::demo_errors(*type);
     cfg.machine.socket_mm = plan.points.front().socket_mm;
     cfg.machine.start = plan.points.front().pose;
     if (!o.faults.empty()) cfg.faults = parse_faults(o.faults);
     PtyEmulator emulator(cfg);
+    emulator.emulator().machine().keep_history();  // for the truth check of every stored point
 
     // A killed demo loses at most its last batch; the demo does not need an fsync per commit.
     storage::StoreOptions so;
@@ -227,7 +304,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
                   << " two-step tests, " << plan.points.size() << " points; emulator on " << emulator.path() << "\n";
     DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
     StoreSink sink(store, id, plan);
-    DemoOperator op(plan, emulator.emulator().machine(), show, cfg.faults.start_delay_s, cfg.faults.feed_override);
+    DemoOperator op(plan, emulator.emulator().machine(), show, cfg.faults);
     acq::Session session(plan, source, sink, op);
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);
@@ -279,6 +356,20 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     out["programs"] = sum.programs;
     out["void_dwells"] = sum.void_dwells;
     out["pauses"] = sum.pauses;
+    emulator.halt();
+    const TruthCheck tc = check_against_truth(store, id, emulator.emulator());
+    const auto& ec = emulator.emulator().counters();
+    out["truth_check"] = {{"points", tc.points},
+                          {"wrong_pose", tc.wrong_pose},
+                          {"stored_twice", tc.stored_twice},
+                          {"samples_stored", tc.samples_stored},
+                          {"dropped_frames", ec.dropped_frames},
+                          {"replayed_frames", ec.replayed_frames},
+                          {"corrupted_bytes", ec.corrupted_bytes}};
+    if (tc.wrong_pose > 0 || tc.stored_twice > 0)
+        throw CliError(kExitFailure, "demo session " + std::to_string(id) + ": " + std::to_string(tc.wrong_pose) +
+                                         " points stored away from their pose (first: " + tc.first_wrong + "), " +
+                                         std::to_string(tc.stored_twice) + " samples stored twice");
 
     int code = kExitOk;
     std::string compensation_text;  // printed after the session's tables
@@ -349,6 +440,10 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
                         arcsec(t["true_rad"]).c_str());
         std::printf("\nSession %lld stored in %s (%zu samples).\n", static_cast<long long>(id), store.path().c_str(),
                     sum.samples);
+        std::printf(
+            "Checked against the emulator's truth: %zu points, each at its planned pose and socket; no "
+            "sample stored twice.\n",
+            tc.points);
         if (!o.report.empty()) std::printf("Report written to %s.\n", o.report.c_str());
     }
     if (!compensation_text.empty()) std::cout << "\n" << compensation_text << std::flush;
@@ -371,6 +466,8 @@ BALLBAR_COMMAND(demo) {
         ->check(CLI::IsMember({"ballbar", "sylvac", "mitutoyo-itn", "digimatic", "modbus"}));
     sub->add_option("--rate", o->gauge_rate_hz, "The gauge's readings per second (--instrument)")
         ->check(CLI::Range(5.0, 1000.0));
+    sub->add_option("--plan", o->plan, "Plan file (ballbar-plan/1) instead of the default four tests at one socket")
+        ->check(CLI::ExistingFile);
     sub->add_option("--faults", o->faults,
                     "Emulator faults (its \"faults\" object, docs/emulator.md): inline JSON or a file");
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });

@@ -176,6 +176,7 @@ TEST_P(DemoFaults, RecoversTheErrorsUnderFaults) {
         run("--db " + db.string() + " report " + std::to_string(j.at("session").get<int>()) + " --json");
     EXPECT_EQ(rep.status, 0) << rep.out.substr(0, 400);
     expect_windows_name_their_samples(db, j.at("session").get<int>());
+    EXPECT_EQ(j.at("truth_check").at("wrong_pose"), 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(
