@@ -115,6 +115,14 @@ void run_session(const std::string& exe, const fs::path& dir, std::uint64_t seed
     const fs::path plan = dir / ("s" + std::to_string(seed) + ".plan.json");
     const fs::path err = dir / ("s" + std::to_string(seed) + ".err");
     Case c = make_case(seed, false);
+    // The session's database (with its journal and lock), and with `all` its plan and stderr too.
+    auto remove_files = [&](bool all) {
+        for (const char* suffix : {"", "-wal", "-shm", ".lock"}) fs::remove(db.string() + suffix);
+        if (all) {
+            fs::remove(plan);
+            fs::remove(err);
+        }
+    };
     std::string out;
     int code = 0;
     bool refused = false;
@@ -129,7 +137,7 @@ void run_session(const std::string& exe, const fs::path& dir, std::uint64_t seed
         const std::string faults = c.faults;
         c = make_case(seed, true);
         c.faults = faults;
-        for (const char* suffix : {"", "-wal", "-shm", ".lock"}) fs::remove(db.string() + suffix);
+        remove_files(false);
     }
     std::lock_guard lock(m);
     ++f.sessions;
@@ -155,9 +163,7 @@ void run_session(const std::string& exe, const fs::path& dir, std::uint64_t seed
             ++f.interrupted;
             f.reasons.push_back("seed " + std::to_string(seed) + ": " + st.value("state_reason", ""));
             f.points += st.value("point_count", 0u);
-            for (const char* suffix : {"", "-wal", "-shm", ".lock"}) fs::remove(db.string() + suffix);
-            fs::remove(plan);
-            fs::remove(err);
+            remove_files(true);
             return;
         }
         ++f.failed;
@@ -196,9 +202,7 @@ void run_session(const std::string& exe, const fs::path& dir, std::uint64_t seed
                     f.worst_angle_arcsec, std::abs(o.at("measured_rad").at(k).get<double>() - v.get<double>()) * 180.0 /
                                               3.141592653589793 * 3600.0);
     if (t.at("wrong_pose").get<std::size_t>() > 0) problem("points at a wrong pose");
-    for (const char* suffix : {"", "-wal", "-shm", ".lock"}) fs::remove(db.string() + suffix);
-    fs::remove(plan);
-    fs::remove(err);
+    remove_files(true);
 }
 
 }  // namespace

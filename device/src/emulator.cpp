@@ -219,19 +219,16 @@ void Emulator::flush_stream() {
     if (pending_.count == 0) return;
     p::FrameBuffer buf{};
     const std::size_t n = p::encode(pending_, stream_seq_, buf);
-    const std::size_t held = pending_.count;
     ++stream_seq_;
     pending_.count = 0;
     if (pending_output() > kOutputLimit) {  // the host is not reading: the device drops and says so
         overrun_ = true;
         ++counters_.dropped_frames;
-        counters_.dropped_samples += held;
         return;
     }
     const double pd = config_.faults.drop_frame_probability;
     if (pd > 0 && uniform() < pd) {
         ++counters_.dropped_frames;
-        counters_.dropped_samples += held;
         return;
     }
     ++counters_.stream_frames;

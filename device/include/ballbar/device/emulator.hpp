@@ -114,7 +114,6 @@ class Emulator : public DeviceEndpoint {
         std::uint64_t samples = 0;          ///< generated while streaming
         std::uint64_t stream_frames = 0;    ///< sent
         std::uint64_t dropped_frames = 0;   ///< by fault injection or overrun
-        std::uint64_t dropped_samples = 0;  ///< the samples those frames held
         std::uint64_t replayed_frames = 0;  ///< sent twice by fault injection
         std::uint64_t cycle_starts = 0;     ///< host Start requests taken as cycle start
         std::uint64_t programs_started = 0;
