@@ -44,6 +44,7 @@ acq::InstrumentStatus DeviceSource::open_and_identify() {
     s.referenced = st.referenced;
     s.calibrated_length_mm = info_->calibrated_length_mm;
     s.sample_rate_hz = rate_hz_;
+    s.range_mm = info_->range_mm;
     return s;
 }
 

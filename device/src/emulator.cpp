@@ -26,8 +26,22 @@ Emulator::Emulator(EmulatorConfig config)
       rate_hz_(config_.instrument.sample_rate_hz),
       averaging_(config_.instrument.averaging) {
     out_.reserve(kOutputLimit + p::kMaxFrameSize);
+    if (config_.continuous) {
+        ContinuousSetup cs;
+        cs.errors = *config_.continuous;
+        const auto& m = config_.machine;
+        cs.start_mm = {m.start.X_mm, m.start.Y_mm, m.start.Z_mm};
+        cs.socket_mm = {m.socket_mm.x(), m.socket_mm.y(), m.socket_mm.z()};
+        cs.socket_offset_mm = {m.socket_offset_mm.x(), m.socket_offset_mm.y(), m.socket_offset_mm.z()};
+        cs.rapid_mm_min = m.rapid_mm_min;
+        continuous_ = std::make_unique<ContinuousMachine>(cs);
+    }
     if (config_.program && config_.program->power_on) {
-        machine_.run_nc(config_.program->text, config_.program->dialect);
+        if (continuous_) {
+            continuous_->run_program(config_.program->text, config_.program->dialect, 0.0);
+        } else {
+            machine_.run_nc(config_.program->text, config_.program->dialect);
+        }
         program_started_ = true;
         loaded_program_ = config_.program->text;
     }
@@ -47,7 +61,10 @@ void Emulator::cycle_start() {
         if (in || in.eof()) {
             const std::string text = ss.str();
             try {
-                analysis::parse_nc_program(text, src.dialect);
+                if (continuous_)
+                    parse_motion_program(text, src.dialect, {0, 0, 0}, 1.0);
+                else
+                    analysis::parse_nc_program(text, src.dialect);
                 if (!text.empty()) src.text = text;
             } catch (const analysis::NcError&) {
                 // a half-written file: keep the last program
@@ -55,6 +72,15 @@ void Emulator::cycle_start() {
         }
     }
     if (src.text.empty()) return;
+    if (continuous_) {
+        // Continuous motion has no program stops: each cycle start runs the program from its start (the
+        // operator resets a program still running and starts it again).
+        continuous_->run_program(src.text, src.dialect, t_s);
+        program_started_ = true;
+        loaded_program_ = src.text;
+        ++counters_.programs_started;
+        return;
+    }
     const bool new_program = !program_started_ || src.text != loaded_program_;
     if (!new_program && machine_.holding()) {
         machine_.cycle_start(t_s);  // at (or on the way to) a program stop: the rest runs
@@ -258,7 +284,9 @@ void Emulator::produce_samples_until(std::uint64_t t_us) {
             pending_first_us_ = ts_us;
         }
         const double temp = bar_temp_C(ts_us);
-        const double reading = machine_.bar_reading_mm(static_cast<double>(t_ns) * 1e-9, temp);
+        const double t_sample_s = static_cast<double>(t_ns) * 1e-9;
+        const double reading =
+            continuous_ ? continuous_->bar_length_mm(t_sample_s) : machine_.bar_reading_mm(t_sample_s, temp);
         const double disp_nm = (reading - L) * 1e6 + zero_nm + noise_nm * gaussian();
         long steps = std::lround(disp_nm / static_cast<double>(p::kResolutionNm));
         std::uint8_t flags = referenced_ ? 0 : analysis::kSampleNotReferenced;

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The emulator's JSON configuration (docs/emulator.md).
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -181,6 +182,65 @@ void parse_faults(const json& j, FaultConfig& f) {
     if (f.stall_s < 0 || f.disconnect_s < 0 || f.reply_delay_ms < 0) fail(w, "durations must not be negative");
 }
 
+// "continuous": the continuous machine's errors, per axis {"X", "Y", "Z"}, per plane {"XY", "YZ", "ZX"}.
+void parse_continuous(const json& j, ContinuousErrors& e) {
+    const std::string w = "continuous";
+    static const std::set<std::string> per_axis = {"servo_lag_ms", "backlash_um",     "reversal_spike_um", "scale_ppm",
+                                                   "cyclic_um",    "cyclic_pitch_mm", "cyclic_phase_deg"};
+    std::set<std::string> allowed = per_axis;
+    allowed.insert(
+        {"squareness_um_per_m", "straightness_um_per_m2", "vibration_um", "vibration_hz", "vibration_phase_deg"});
+    only_keys(j, w, allowed);
+    for (const auto& key : per_axis) {
+        if (!j.contains(key)) continue;
+        const std::string wk = w + "." + key;
+        only_keys(j.at(key), wk, {"X", "Y", "Z"});
+        for (std::size_t a = 0; a < 3; ++a) {
+            const char name[2] = {"XYZ"[a], 0};
+            AxisErrors& ax = e.axis[a];
+            double* field = key == "servo_lag_ms"        ? &ax.servo_lag_ms
+                            : key == "backlash_um"       ? &ax.backlash_um
+                            : key == "reversal_spike_um" ? &ax.reversal_spike_um
+                            : key == "scale_ppm"         ? &ax.scale_ppm
+                            : key == "cyclic_um"         ? &ax.cyclic_um
+                            : key == "cyclic_pitch_mm"   ? &ax.cyclic_pitch_mm
+                                                         : &ax.cyclic_phase_deg;
+            *field = num(j.at(key), wk, name, *field);
+            if (!std::isfinite(*field)) fail(wk + "." + name, "must be a finite number");
+        }
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+        const std::string axis(1, "XYZ"[a]);
+        if (!(e.axis[a].servo_lag_ms >= 0 && e.axis[a].servo_lag_ms <= 1000))
+            fail(w + ".servo_lag_ms." + axis, "must be in [0, 1000] ms");
+        if (!(e.axis[a].cyclic_pitch_mm >= 0)) fail(w + ".cyclic_pitch_mm." + axis, "must not be negative");
+        if (e.axis[a].cyclic_um != 0 && !(e.axis[a].cyclic_pitch_mm > 0))
+            fail(w + ".cyclic_pitch_mm." + axis, "a cyclic error needs its pitch (> 0 mm)");
+    }
+    if (j.contains("squareness_um_per_m")) {
+        const std::string wk = w + ".squareness_um_per_m";
+        only_keys(j.at("squareness_um_per_m"), wk, {"XY", "YZ", "ZX"});
+        const char* planes[3] = {"XY", "YZ", "ZX"};
+        for (std::size_t i = 0; i < 3; ++i)
+            e.squareness_um_per_m[i] = num(j.at("squareness_um_per_m"), wk, planes[i], e.squareness_um_per_m[i]);
+    }
+    if (j.contains("straightness_um_per_m2")) {
+        const std::string wk = w + ".straightness_um_per_m2";
+        only_keys(j.at("straightness_um_per_m2"), wk, {"x_in_y", "x_in_z", "y_in_x", "y_in_z", "z_in_x", "z_in_y"});
+        for (std::size_t a = 0; a < 3; ++a)
+            for (std::size_t b = 0; b < 3; ++b) {
+                if (a == b) continue;
+                const std::string key = std::string(1, "xyz"[a]) + "_in_" + "xyz"[b];
+                e.straightness_um_per_m2[a][b] =
+                    num(j.at("straightness_um_per_m2"), wk, key.c_str(), e.straightness_um_per_m2[a][b]);
+            }
+    }
+    e.vibration_um = num(j, w, "vibration_um", e.vibration_um);
+    e.vibration_hz = num(j, w, "vibration_hz", e.vibration_hz);
+    e.vibration_phase_deg = num(j, w, "vibration_phase_deg", e.vibration_phase_deg);
+    if (!(e.vibration_hz >= 0 && e.vibration_hz <= 2500)) fail(w + ".vibration_hz", "must be in [0, 2500] Hz");
+}
+
 std::string read_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw std::invalid_argument("cannot read " + path);
@@ -199,7 +259,7 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
         throw std::invalid_argument(std::string("emulator config: not valid JSON: ") + e.what());
     }
     EmulatorConfig c;
-    only_keys(j, "", {"seed", "instrument", "machine", "program", "faults"});
+    only_keys(j, "", {"seed", "instrument", "machine", "program", "faults", "continuous"});
     if (j.contains("seed")) {
         if (!j.at("seed").is_number_unsigned()) fail("seed", "must be a non-negative integer");
         c.seed = j.at("seed").get<std::uint64_t>();
@@ -207,6 +267,10 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
     if (j.contains("instrument")) parse_instrument(j.at("instrument"), c.instrument);
     if (j.contains("machine")) parse_machine(j.at("machine"), c.machine);
     if (j.contains("faults")) parse_faults(j.at("faults"), c.faults);
+    if (j.contains("continuous")) {
+        c.continuous.emplace();
+        parse_continuous(j.at("continuous"), *c.continuous);
+    }
     if (j.contains("program")) {
         const auto& pj = j.at("program");
         only_keys(pj, "program", {"file", "text", "dialect", "start"});
@@ -233,7 +297,10 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
             if (src.power_on || std::filesystem::exists(f)) src.text = read_file(f.string());
         }
         try {
-            analysis::parse_nc_program(src.text, src.dialect);  // fail now, with the line number
+            if (c.continuous)  // arcs: the continuous machine's own reader
+                parse_motion_program(src.text, src.dialect, {0, 0, 0}, 1.0);
+            else
+                analysis::parse_nc_program(src.text, src.dialect);  // fail now, with the line number
         } catch (const analysis::NcError& e) {
             fail("program", e.what());
         }

@@ -37,6 +37,7 @@ struct InstrumentStatus {
     bool referenced = false;
     double calibrated_length_mm = 100;
     double sample_rate_hz = 1000;
+    std::optional<double> range_mm;  ///< the transducer's range (±), when the instrument says it
 };
 
 enum class ReadStatus { Ok, Timeout, Disconnected };
@@ -157,6 +158,9 @@ class Operator {
     virtual void program_stop(const ProgramStop& stop) = 0;
     /// A point was captured (attributed and within its checks) and stored.
     virtual void point_captured(const CapturedPoint&) {}
+    /// A continuous test (the circular test): the machine must run its part program now, from its
+    /// start (`retry`: again, after a run that could not be used). `what` says which program and why.
+    virtual void run_part_program(std::string_view what, bool /*retry*/) { message(what); }
 };
 
 /// Answers from the plan file; messages and progress are dropped.

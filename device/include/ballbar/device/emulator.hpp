@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "ballbar/analysis/nc_program.hpp"
+#include "ballbar/device/continuous_machine.hpp"
 #include "ballbar/device/protocol.hpp"
 #include "ballbar/device/sim_machine.hpp"
 #include "ballbar/device/transport.hpp"
@@ -75,6 +76,9 @@ struct EmulatorConfig {
     MachineSetup machine;
     std::optional<NcSource> program;  ///< the machine's program (power-on or cycle start)
     FaultConfig faults;
+    /// Continuous motion of the linear axes (the circular test, docs/emulator.md): when set, programs run
+    /// on a ContinuousMachine (arcs, servo lag, the trace format's effects) and the bar measures it.
+    std::optional<ContinuousErrors> continuous;
 };
 
 /// Parses the JSON configuration (docs/emulator.md). Unknown keys and bad values throw
@@ -104,6 +108,9 @@ class Emulator : public DeviceEndpoint {
     std::size_t pending_output() const { return out_.size() - out_head_; }
 
     SimulatedMachine& machine() { return machine_; }
+    /// The continuous machine (configured with "continuous"), else nullptr.
+    ContinuousMachine* continuous() { return continuous_.get(); }
+    const ContinuousMachine* continuous() const { return continuous_.get(); }
     const SimulatedMachine& machine() const { return machine_; }
     const EmulatorConfig& config() const { return config_; }
     FaultConfig& faults() { return config_.faults; }
@@ -142,6 +149,7 @@ class Emulator : public DeviceEndpoint {
 
     EmulatorConfig config_;
     SimulatedMachine machine_;
+    std::unique_ptr<ContinuousMachine> continuous_;
     std::mt19937_64 rng_;
     protocol::Decoder decoder_;
     std::vector<std::uint8_t> out_;

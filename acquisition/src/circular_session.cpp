@@ -1,0 +1,383 @@
+// SPDX-License-Identifier: MIT
+// The circular test's guided procedure (circular_session.hpp, docs/procedure.md).
+#include "ballbar/acquisition/circular_session.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace ballbar::acquisition {
+
+namespace circ = analysis::circular;
+using analysis::BarSample;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kLinkRetries = 3;
+
+std::string fmt(double v, int digits) {
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(digits) << v;
+    return os.str();
+}
+
+}  // namespace
+
+std::string circular_instrument_mismatch(const circ::TestSpec& test, const InstrumentStatus& status) {
+    const double L = status.calibrated_length_mm;
+    const double R = test.radius_mm;
+    const double range = status.range_mm.value_or(1.0);
+    if (std::abs(R - L) > 0.5 * range)
+        return "the bar is calibrated at " + fmt(L, 3) + " mm but the test's radius is " + fmt(R, 3) +
+               " mm: plan the test with --radius " + fmt(L, 3) + " (the bar's length) or fit the extension that makes " +
+               fmt(R, 3) + " mm";
+    if (status.range_mm && R + test.feed_in_mm - L > 0.95 * range)
+        return "the feed-in of " + fmt(test.feed_in_mm, 3) + " mm leaves the bar's ±" + fmt(range, 3) +
+               " mm range (the machine stands at " + fmt(R + test.feed_in_mm - L, 3) +
+               " mm from the calibrated length before it): plan the test with --feed-in " +
+               fmt(std::floor((0.95 * range - (R - L)) * 100.0) / 100.0, 2) + " or less";
+    if (status.sample_rate_hz > 0) {
+        const circ::SamplingLimit lim = circ::sampling_limit(test, status.sample_rate_hz);
+        if (test.feed_mm_min > lim.max_feed_mm_min * (1.0 + 1e-9)) {
+            const double highest = std::floor(lim.max_feed_mm_min + 1e-6);
+            return "the feed of " + fmt(test.feed_mm_min, 0) + " mm/min is too fast for the instrument's " +
+                   fmt(status.sample_rate_hz, 1) + " readings/s: its samples would lie " +
+                   fmt(test.feed_mm_min / (60.0 * status.sample_rate_hz), 3) +
+                   " mm apart along the path and the diagnosis needs at most " + fmt(lim.max_spacing_mm, 3) + " mm (" +
+                   lim.binding + "); the highest usable feed is " + fmt(highest, 0) + " mm/min (plan with --feed " +
+                   fmt(highest, 0) + ")";
+        }
+    }
+    return {};
+}
+
+CircularSession::CircularSession(circ::TestSpec test, SampleSource& source, CircularSink& sink, Operator& op,
+                                 CircularOptions options)
+    : test_(std::move(test)), source_(source), sink_(sink), op_(op), options_(options) {}
+
+void CircularSession::fire(Event e, const std::string& detail) {
+    const State from = sm_.state();
+    const State to = sm_.apply(e);
+    sink_.on_transition({from, to, e, detail});
+}
+
+void CircularSession::end(Event e, const std::string& reason) {
+    summary_.reason = reason;
+    if (sm_.can_apply(e)) fire(e, reason);
+    throw Stop{};
+}
+
+void CircularSession::end_interrupted(const std::string& reason) {
+    summary_.interrupted = true;
+    end(Event::Abort, reason);
+}
+
+void CircularSession::check_stop() {
+    if (options_.stop && options_.stop->load()) end_interrupted("interrupted by the operator");
+}
+
+void CircularSession::reference() {
+    for (;;) {
+        check_stop();
+        if (op_.confirm("reference", "Put the bar in its calibrator to set the reference (zero). Ready?")) break;
+        const std::size_t c = op_.choose({"reference-declined",
+                                          "The instrument must be referenced before it measures. Ask again, or stop "
+                                          "the session (resumable)?",
+                                          {"again", "stop"},
+                                          0});
+        if (c == 1) end_interrupted("reference not set");
+    }
+    for (int attempt = 1;; ++attempt) {
+        try {
+            source_.set_reference();
+            return;
+        } catch (const SourceError& err) {
+            if (attempt >= kLinkRetries) end_interrupted(std::string("setting the reference failed: ") + err.what());
+            op_.message(std::string("Setting the reference failed (") + err.what() + "): reconnecting.");
+            wait_for_instrument();
+        }
+    }
+}
+
+void CircularSession::wait_for_instrument() {
+    for (int i = 0;; ++i) {
+        if (i >= options_.max_reconnect_attempts) end_interrupted("the instrument did not come back");
+        check_stop();
+        try {
+            if (source_.reconnect(options_.read_timeout)) return;
+        } catch (const SourceError& err) {
+            end_interrupted(std::string("the instrument came back unusable: ") + err.what());
+        }
+    }
+}
+
+void CircularSession::stream_on() {
+    if (streaming_) return;
+    for (int attempt = 1;; ++attempt) {
+        try {
+            source_.start();
+            break;
+        } catch (const SourceError& err) {
+            if (attempt >= kLinkRetries) end_interrupted(std::string("the instrument does not stream: ") + err.what());
+            op_.message(std::string("The instrument does not stream (") + err.what() + "): reconnecting.");
+            wait_for_instrument();
+            reference();
+        }
+    }
+    streaming_ = true;
+}
+
+void CircularSession::stream_off() {
+    if (!streaming_) return;
+    streaming_ = false;
+    try {
+        source_.stop();
+    } catch (const SourceError&) {
+        // a link that broke while stopping shows at the next start
+    }
+}
+
+double CircularSession::run_duration_s(std::size_t run) const {
+    const circ::RunSpec& r = test_.runs[run];
+    const double v = test_.feed_mm_min / 60.0;
+    return (2.0 * r.overshoot_deg + r.data_arc_deg) * kPi / 180.0 * test_.radius_mm / v;
+}
+
+bool CircularSession::attempt(int number) {
+    CircularAttempt a;
+    a.attempt = number;
+    const bool retry = number > options_.first_attempt;
+    std::ostringstream what;
+    what << (retry ? "Run the circular test's part program again from its start" : "Start the circular test's part program")
+         << " (" << circ::plane_name(test_.plane) << ", radius " << test_.radius_mm << " mm, feed " << test_.feed_mm_min
+         << " mm/min, " << test_.runs.size() << " run" << (test_.runs.size() == 1 ? "" : "s")
+         << "): load it and press cycle start now.";
+    op_.run_part_program(what.str(), retry);
+    stream_on();
+    ++summary_.attempts;
+
+    const double L = status_.calibrated_length_mm;
+    const double v = test_.feed_mm_min / 60.0;
+    const double feed_in_s = test_.feed_in_mm / v;
+    std::vector<circ::TraceSample> samples;
+    std::vector<std::uint64_t> seqs;
+    std::vector<std::size_t> gaps;          // index of the first sample after each gap
+    std::vector<std::size_t> out_of_range;  // samples beyond the transducer's range
+    std::optional<circ::FeedIn> fi;
+    std::size_t run = 0, from = 0;
+    double searched_at = -1e300;
+    int silent = 0;
+    std::size_t since_progress = 0;
+    std::array<BarSample, 256> buf{};
+    const auto give_up = [&](const std::string& why) {
+        a.good = false;
+        a.why = why;
+        if (!seqs.empty()) a.first_seq = seqs.front(), a.last_seq = seqs.back();
+        stream_off();
+        sink_.on_attempt(a);
+        fire(Event::ProgramEnded, "attempt " + std::to_string(number) + ": " + why);
+        op_.message("This run of the program cannot be used: " + why + ".");
+        return false;
+    };
+    const auto run_name = [&](std::size_t k) {
+        return "run " + std::to_string(k + 1) + " (" + circ::direction_name(test_.runs[k].direction) + ")";
+    };
+    for (;;) {
+        check_stop();
+        std::size_t n = 0;
+        const ReadStatus st = source_.read(buf, n, options_.read_timeout);
+        if (st == ReadStatus::Disconnected) {
+            ++summary_.pauses;
+            streaming_ = false;
+            fire(Event::DeviceLost, "instrument lost during " + (run < test_.runs.size() ? run_name(run) : "the test"));
+            op_.message("Instrument lost: plug it back in. The running program cannot finish the test: stop it (reset) "
+                        "once the instrument is back; it is run again from its start.");
+            wait_for_instrument();
+            reference();
+            fire(Event::DeviceBack, "re-referenced");
+            a.good = false;
+            a.why = "the instrument was lost during " + (run < test_.runs.size() ? run_name(run) : "the test");
+            if (!seqs.empty()) a.first_seq = seqs.front(), a.last_seq = seqs.back();
+            sink_.on_attempt(a);
+            fire(Event::ProgramEnded, "attempt " + std::to_string(number) + ": " + a.why);
+            return false;
+        }
+        if (st == ReadStatus::Timeout || n == 0) {
+            const double silent_s = ++silent * static_cast<double>(options_.read_timeout.count()) * 1e-3;
+            if (silent_s > 30.0) return give_up("the instrument sent nothing for 30 s");
+            continue;
+        }
+        silent = 0;
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const BarSample& s = buf[i];
+            if (last_seq_ && s.seq <= *last_seq_) {
+                ++summary_.duplicates_dropped;
+                continue;
+            }
+            if (last_seq_ && s.seq != *last_seq_ + 1) {
+                ++summary_.gaps;
+                gaps.push_back(samples.size());
+            }
+            last_seq_ = s.seq;
+            const double t = static_cast<double>(s.device_time_us) * 1e-6;
+            if (!samples.empty() && !(t > samples.back().time_s)) {
+                gaps.push_back(samples.size());  // the device clock went back: a new stream, not one trace
+                continue;
+            }
+            if (s.flags & analysis::kSampleOutOfRange) out_of_range.push_back(samples.size());
+            samples.push_back({t, s.length_mm(L)});
+            seqs.push_back(s.seq);
+            buf[kept++] = s;
+        }
+        if (kept == 0) continue;
+        sink_.on_samples(std::span<const BarSample>(buf.data(), kept));
+        summary_.samples += kept;
+        const double now = samples.back().time_s;
+        since_progress += kept;
+        if (since_progress >= 200) {
+            since_progress = 0;
+            Progress p;
+            p.state = sm_.state();
+            p.done = run;
+            p.total = test_.runs.size();
+            p.live_mm = samples.back().measured_mm;
+            p.expected_mm = test_.radius_mm;
+            p.out_of_range = !out_of_range.empty() && out_of_range.back() + 1 == samples.size();
+            op_.progress(p);
+        }
+        if (!fi) {
+            if (now - samples.front().time_s >
+                options_.start_grace_s + options_.dwell_s * static_cast<double>(run + 1) +
+                    (run > 0 ? run_duration_s(run - 1) + 2 * feed_in_s : 0.0))
+                return give_up("no feed-in of " + run_name(run) + " was found in the data");
+            if (now - searched_at < 0.25) continue;
+            searched_at = now;
+            const auto f = circ::find_feed_in(test_, samples, from);
+            if (f && now > f->command_end_s + 0.3) fi = f;
+            continue;
+        }
+        const double lag_margin = 5.0 * fi->lag_s + 0.2;
+        const double end_s = fi->command_end_s + run_duration_s(run) + feed_in_s + lag_margin;
+        if (now < end_s) continue;
+        const double start_s = fi->command_end_s - feed_in_s - lag_margin;
+        const auto first = static_cast<std::size_t>(
+            std::lower_bound(samples.begin() + static_cast<std::ptrdiff_t>(from), samples.end(), start_s,
+                             [](const circ::TraceSample& s, double t) { return s.time_s < t; }) -
+            samples.begin());
+        auto last = static_cast<std::size_t>(
+            std::upper_bound(samples.begin(), samples.end(), end_s,
+                             [](double t, const circ::TraceSample& s) { return t < s.time_s; }) -
+            samples.begin());
+        last = last == 0 ? 0 : last - 1;
+        const auto lost = std::count_if(gaps.begin(), gaps.end(), [&](std::size_t g) { return g > first && g <= last; });
+        const auto beyond =
+            std::count_if(out_of_range.begin(), out_of_range.end(), [&](std::size_t g) { return g >= first && g <= last; });
+        if (lost > 0 || beyond > 0) {
+            const std::string why = run_name(run) + (lost > 0 ? " has " + std::to_string(lost) + " gap" +
+                                                                     (lost == 1 ? "" : "s") + " in its stream"
+                                                               : " left the bar's range in " +
+                                                                     std::to_string(beyond) + " samples");
+            fire(Event::PointRejected, why);
+            return give_up(why);
+        }
+        CircularRun r;
+        r.direction = test_.runs[run].direction;
+        r.feed_in_end_s = fi->command_end_s;
+        r.lag_s = fi->lag_s;
+        r.first_seq = seqs[first];
+        r.last_seq = seqs[last];
+        a.runs.push_back(r);
+        fire(Event::PointCaptured, run_name(run) + " captured: feed-in ends at " + fmt(fi->command_end_s, 3) +
+                                       " s, lag " + fmt(fi->lag_s * 1e3, 1) + " ms");
+        op_.message(run_name(run) + " captured.");
+        from = last;
+        fi.reset();
+        ++run;
+        if (run < test_.runs.size()) continue;
+        stream_off();
+        a.good = true;
+        a.first_seq = seqs.front();
+        a.last_seq = seqs[last];
+        sink_.on_attempt(a);
+        summary_.good = a;
+        summary_.trace.assign(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(last + 1));
+        return true;
+    }
+}
+
+CircularSummary CircularSession::run() {
+    try {
+        try {
+            status_ = source_.connect();
+        } catch (const SourceError& e) {
+            end(Event::Fail, std::string("cannot open the instrument: ") + e.what());
+        }
+        fire(Event::Connected, status_.description);
+        if (const std::string bad = test_.validate(); !bad.empty()) {
+            summary_.refused = true;
+            end(Event::Fail, "the test: " + bad);
+        }
+        if (const std::string mismatch = circular_instrument_mismatch(test_, status_); !mismatch.empty()) {
+            summary_.refused = true;
+            end(Event::Fail, mismatch);
+        }
+        if (status_.battery_pct < 5)
+            end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
+        if (!status_.referenced) reference();
+        fire(Event::CheckPassed, "bar " + fmt(status_.calibrated_length_mm, 3) + " mm, " +
+                                     fmt(status_.sample_rate_hz, 0) + " readings/s");
+        std::ostringstream setup;
+        setup << "Circular test in " << circ::plane_name(test_.plane) << ": mount the socket at the circle centre X"
+              << test_.centre_mm[0] << " Y" << test_.centre_mm[1] << " Z" << test_.centre_mm[2]
+              << " and the bar between it and the tool ball; the program stands at radius "
+              << test_.radius_mm + test_.feed_in_mm << " mm before each feed-in. Ready?";
+        if (!op_.confirm("setup", setup.str())) end(Event::Abort, "set-up not confirmed");
+        fire(Event::SetUpConfirmed, "circular test, " + std::to_string(test_.runs.size()) + " runs");
+        int number = options_.first_attempt;
+        for (;;) {
+            bool good = false;
+            for (; number < options_.first_attempt + options_.max_attempts; ++number) {
+                if (sm_.state() == State::Retry) fire(Event::RetryStarted, "attempt " + std::to_string(number));
+                if (attempt(number)) {
+                    good = true;
+                    ++number;
+                    break;
+                }
+            }
+            if (!good)
+                end_interrupted(std::to_string(options_.max_attempts) +
+                                " runs of the program could not be used; resume the session to run it again");
+            fire(Event::AllPointsCaptured, "every run captured");
+            try {
+                summary_.result = circ::analyze_circular(test_, summary_.trace);
+            } catch (const circ::CircularError& e) {
+                end(Event::Fail, std::string("the analysis of the captured runs failed: ") + e.what());
+            }
+            std::ostringstream review;
+            review << "Circular deviation G:";
+            for (const auto& r : summary_.result->runs)
+                review << " " << circ::direction_name(r.direction) << " " << fmt(r.circularity_um, 2) << " µm";
+            if (summary_.result->bidirectional_um) review << ", G(b) " << fmt(*summary_.result->bidirectional_um, 2) << " µm";
+            review << ". Accept the test?";
+            fire(Event::ResultsReady, review.str());
+            if (op_.confirm("review", review.str())) {
+                fire(Event::Accepted, "accepted");
+                break;
+            }
+            fire(Event::Rejected, "rejected: the program is run again");
+            summary_.result.reset();
+            summary_.good.reset();
+            summary_.trace.clear();
+        }
+    } catch (const Stop&) {
+        stream_off();
+    }
+    summary_.final_state = sm_.state();
+    return summary_;
+}
+
+}  // namespace ballbar::acquisition
