@@ -17,6 +17,7 @@
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/storage/trace_file.hpp"
+#include "circle_measure.hpp"
 #include "circle_output.hpp"
 #include "command.hpp"
 #include "storage_errors.hpp"
@@ -290,7 +291,7 @@ int run_analyze(const AnalyzeOptions& o, const Globals& globals) {
 
 BALLBAR_COMMAND(circle) {
     using namespace ballbar::app;
-    auto* circle = root.add_subcommand("circle", "The ISO 230-4 circular test: plan, analyze");
+    auto* circle = root.add_subcommand("circle", "The ISO 230-4 circular test: plan, measure, analyze");
     circle->require_subcommand(1);
 
     auto po = std::make_shared<PlanOptions>();
@@ -329,4 +330,5 @@ BALLBAR_COMMAND(circle) {
                    "print backlash/scale settings: linuxcnc, marlin, smoothieware, grblhal")
         ->check(CLI::IsMember({"linuxcnc", "marlin", "smoothieware", "grblhal"}));
     an->callback([ao, &globals] { globals.action = [ao, &globals] { return run_analyze(*ao, globals); }; });
+    add_circle_measure(*circle, globals);  // circle measure (cmd_circle_measure.cpp)
 }

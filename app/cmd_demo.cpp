@@ -25,6 +25,7 @@
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
+#include "circle_measure.hpp"  // demo --test circular
 #include "command.hpp"
 #include "gauge_source.hpp"  // demo --instrument: a digital gauge (issue 14)
 #if __has_include("ballbar/report/build.hpp")
@@ -51,8 +52,11 @@ struct DemoOptions {
     std::string report;      ///< --report PATH: write the session's PDF report
     std::string instrument;  ///< --instrument KIND: a digital gauge instead of the ballbar (gauge_demo.cpp)
     double gauge_rate_hz = 20;
-    std::string faults;  ///< --faults SPEC
-    std::string plan;    ///< --plan FILE: a ballbar-plan/1 file instead of the default plan
+    std::string faults;        ///< --faults SPEC
+    std::string plan;          ///< --plan FILE: a ballbar-plan/1 file instead of the default plan
+    std::string test = "ssm";  ///< --test circular: the circular test (cmd_circle_measure.cpp)
+    std::string plane = "XY";
+    double arc_deg = 0;
 };
 
 /// Answers every question like the plan and drives the emulator's machine as its operator would: runs
@@ -246,6 +250,8 @@ std::string arcsec(const json& angles, const json& std = nullptr) {
 }
 
 int run_demo(const DemoOptions& o, const Globals& globals) {
+    if (o.test == "circular")
+        return run_circular_demo({o.seed, o.json, o.plane, o.arc_deg, 100.0, 1000.0, o.faults}, globals);
     if (!o.instrument.empty() && o.instrument != "ballbar")
         return run_gauge_demo({o.instrument, o.machine, o.seed, o.gauge_rate_hz, o.json}, resolve_db_path(globals));
     const auto type = ba::parse_machine_type(o.machine);
@@ -470,6 +476,11 @@ BALLBAR_COMMAND(demo) {
         ->check(CLI::ExistingFile);
     sub->add_option("--faults", o->faults,
                     "Emulator faults (its \"faults\" object, docs/emulator.md): inline JSON or a file");
+    sub->add_option("--test", o->test, "ssm (default: the two-step SSM) or circular (ISO 230-4)")
+        ->check(CLI::IsMember({"ssm", "circular"}));
+    sub->add_option("--plane", o->plane, "--test circular: XY, YZ or ZX")->check(CLI::IsMember({"XY", "YZ", "ZX"}));
+    sub->add_option("--arc", o->arc_deg, "--test circular: data arc, degrees (default 360 in XY, 180 in YZ and ZX)")
+        ->check(CLI::Range(30.0, 360.0));
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });
 }
 

@@ -15,6 +15,7 @@ const std::map<std::string, std::string>& examples() {
         {"circle",
          "  ballbar circle plan --plane XY --radius 100 --feed 1000 --out circle.nc\n"
          "  ballbar circle analyze trace.csv --json --tolerance 15\n"
+         "  ballbar circle measure --device serial:/dev/ttyACM0 --test test.json   # guided, stored\n"
          "  ballbar circle analyze 4 --controller linuxcnc     # the measured backlash as INI settings\n"},
         {"compensate",
          "  ballbar compensate --model tttrr --program part.nc --out part-comp.nc\n"
@@ -24,7 +25,8 @@ const std::map<std::string, std::string>& examples() {
          "  ballbar demo                                 # TTTRR, the guided procedure on the emulator\n"
          "  ballbar demo --machine RRTTT --json\n"
          "  ballbar demo --report demo.pdf --compensate\n"
-         "  ballbar demo --instrument digimatic           # the procedure on an emulated digital gauge\n"},
+         "  ballbar demo --instrument digimatic           # the procedure on an emulated digital gauge\n"
+         "  ballbar demo --test circular --plane ZX       # the circular test, each diagnostic against the truth\n"},
         {"devices", "  ballbar devices\n  ballbar devices --json\n"},
         {"discover", "  ballbar discover readings.csv --json\n  ballbar discover 3\n"},
         {"emulate",

@@ -32,8 +32,8 @@ std::string circular_instrument_mismatch(const circ::TestSpec& test, const Instr
     const double range = status.range_mm.value_or(1.0);
     if (std::abs(R - L) > 0.5 * range)
         return "the bar is calibrated at " + fmt(L, 3) + " mm but the test's radius is " + fmt(R, 3) +
-               " mm: plan the test with --radius " + fmt(L, 3) + " (the bar's length) or fit the extension that makes " +
-               fmt(R, 3) + " mm";
+               " mm: plan the test with --radius " + fmt(L, 3) +
+               " (the bar's length) or fit the extension that makes " + fmt(R, 3) + " mm";
     if (status.range_mm && R + test.feed_in_mm - L > 0.95 * range)
         return "the feed-in of " + fmt(test.feed_in_mm, 3) + " mm leaves the bar's ±" + fmt(range, 3) +
                " mm range (the machine stands at " + fmt(R + test.feed_in_mm - L, 3) +
@@ -151,7 +151,8 @@ bool CircularSession::attempt(int number) {
     a.attempt = number;
     const bool retry = number > options_.first_attempt;
     std::ostringstream what;
-    what << (retry ? "Run the circular test's part program again from its start" : "Start the circular test's part program")
+    what << (retry ? "Run the circular test's part program again from its start"
+                   : "Start the circular test's part program")
          << " (" << circ::plane_name(test_.plane) << ", radius " << test_.radius_mm << " mm, feed " << test_.feed_mm_min
          << " mm/min, " << test_.runs.size() << " run" << (test_.runs.size() == 1 ? "" : "s")
          << "): load it and press cycle start now.";
@@ -193,8 +194,9 @@ bool CircularSession::attempt(int number) {
             ++summary_.pauses;
             streaming_ = false;
             fire(Event::DeviceLost, "instrument lost during " + (run < test_.runs.size() ? run_name(run) : "the test"));
-            op_.message("Instrument lost: plug it back in. The running program cannot finish the test: stop it (reset) "
-                        "once the instrument is back; it is run again from its start.");
+            op_.message(
+                "Instrument lost: plug it back in. The running program cannot finish the test: stop it (reset) "
+                "once the instrument is back; it is run again from its start.");
             wait_for_instrument();
             reference();
             fire(Event::DeviceBack, "re-referenced");
@@ -250,9 +252,9 @@ bool CircularSession::attempt(int number) {
             op_.progress(p);
         }
         if (!fi) {
-            if (now - samples.front().time_s >
-                options_.start_grace_s + options_.dwell_s * static_cast<double>(run + 1) +
-                    (run > 0 ? run_duration_s(run - 1) + 2 * feed_in_s : 0.0))
+            if (now - samples.front().time_s > options_.start_grace_s +
+                                                   options_.dwell_s * static_cast<double>(run + 1) +
+                                                   (run > 0 ? run_duration_s(run - 1) + 2 * feed_in_s : 0.0))
                 return give_up("no feed-in of " + run_name(run) + " was found in the data");
             if (now - searched_at < 0.25) continue;
             searched_at = now;
@@ -273,14 +275,15 @@ bool CircularSession::attempt(int number) {
                              [](double t, const circ::TraceSample& s) { return t < s.time_s; }) -
             samples.begin());
         last = last == 0 ? 0 : last - 1;
-        const auto lost = std::count_if(gaps.begin(), gaps.end(), [&](std::size_t g) { return g > first && g <= last; });
-        const auto beyond =
-            std::count_if(out_of_range.begin(), out_of_range.end(), [&](std::size_t g) { return g >= first && g <= last; });
+        const auto lost =
+            std::count_if(gaps.begin(), gaps.end(), [&](std::size_t g) { return g > first && g <= last; });
+        const auto beyond = std::count_if(out_of_range.begin(), out_of_range.end(),
+                                          [&](std::size_t g) { return g >= first && g <= last; });
         if (lost > 0 || beyond > 0) {
-            const std::string why = run_name(run) + (lost > 0 ? " has " + std::to_string(lost) + " gap" +
-                                                                     (lost == 1 ? "" : "s") + " in its stream"
-                                                               : " left the bar's range in " +
-                                                                     std::to_string(beyond) + " samples");
+            const std::string why =
+                run_name(run) +
+                (lost > 0 ? " has " + std::to_string(lost) + " gap" + (lost == 1 ? "" : "s") + " in its stream"
+                          : " left the bar's range in " + std::to_string(beyond) + " samples");
             fire(Event::PointRejected, why);
             return give_up(why);
         }
@@ -328,8 +331,8 @@ CircularSummary CircularSession::run() {
         if (status_.battery_pct < 5)
             end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
         if (!status_.referenced) reference();
-        fire(Event::CheckPassed, "bar " + fmt(status_.calibrated_length_mm, 3) + " mm, " +
-                                     fmt(status_.sample_rate_hz, 0) + " readings/s");
+        fire(Event::CheckPassed,
+             "bar " + fmt(status_.calibrated_length_mm, 3) + " mm, " + fmt(status_.sample_rate_hz, 0) + " readings/s");
         std::ostringstream setup;
         setup << "Circular test in " << circ::plane_name(test_.plane) << ": mount the socket at the circle centre X"
               << test_.centre_mm[0] << " Y" << test_.centre_mm[1] << " Z" << test_.centre_mm[2]
@@ -361,7 +364,8 @@ CircularSummary CircularSession::run() {
             review << "Circular deviation G:";
             for (const auto& r : summary_.result->runs)
                 review << " " << circ::direction_name(r.direction) << " " << fmt(r.circularity_um, 2) << " µm";
-            if (summary_.result->bidirectional_um) review << ", G(b) " << fmt(*summary_.result->bidirectional_um, 2) << " µm";
+            if (summary_.result->bidirectional_um)
+                review << ", G(b) " << fmt(*summary_.result->bidirectional_um, 2) << " µm";
             review << ". Accept the test?";
             fire(Event::ResultsReady, review.str());
             if (op_.confirm("review", review.str())) {

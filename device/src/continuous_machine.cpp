@@ -19,9 +19,9 @@ using analysis::kPi;
 
 namespace {
 
-constexpr double kStepS = 1e-4;          ///< integration step of the lag while the command moves
-constexpr double kSpikeTauS = 0.015;     ///< trace.md: a reversal spike decays with 15 ms
-constexpr double kMovingMmPerS = 1e-6;   ///< below this an axis counts as standing (direction kept)
+constexpr double kStepS = 1e-4;         ///< integration step of the lag while the command moves
+constexpr double kSpikeTauS = 0.015;    ///< trace.md: a reversal spike decays with 15 ms
+constexpr double kMovingMmPerS = 1e-6;  ///< below this an axis counts as standing (direction kept)
 constexpr double kTwoPi = 2.0 * kPi;
 
 struct Words {
@@ -59,15 +59,37 @@ Words parse_words(std::string_view line, int line_no) {
                 w.g.push_back(static_cast<int>(value));
                 break;
             }
-            case 'X': w.x = value; break;
-            case 'Y': w.y = value; break;
-            case 'Z': w.z = value; break;
-            case 'I': w.i = value; break;
-            case 'J': w.j = value; break;
-            case 'K': w.k = value; break;
-            case 'F': w.f = value; break;
-            case 'P': w.p = value; break;
-            case 'N': case 'M': case 'S': case 'T': case 'H': case 'D': break;  // not motion
+            case 'X':
+                w.x = value;
+                break;
+            case 'Y':
+                w.y = value;
+                break;
+            case 'Z':
+                w.z = value;
+                break;
+            case 'I':
+                w.i = value;
+                break;
+            case 'J':
+                w.j = value;
+                break;
+            case 'K':
+                w.k = value;
+                break;
+            case 'F':
+                w.f = value;
+                break;
+            case 'P':
+                w.p = value;
+                break;
+            case 'N':
+            case 'M':
+            case 'S':
+            case 'T':
+            case 'H':
+            case 'D':
+                break;  // not motion
             default:
                 throw analysis::NcError(line_no, std::string("unsupported word ") + letter + text);
         }
@@ -106,10 +128,10 @@ Xyz segment_at(const PathSegment& s, double u) {
     u = std::clamp(u, 0.0, 1.0);
     if (s.kind == PathSegment::Kind::Dwell) return s.from;
     Xyz out{};
-    for (int a = 0; a < 3; ++a) out[static_cast<std::size_t>(a)] = s.from[static_cast<std::size_t>(a)] +
-                                                                     (s.to[static_cast<std::size_t>(a)] -
-                                                                      s.from[static_cast<std::size_t>(a)]) *
-                                                                         u;
+    for (int a = 0; a < 3; ++a)
+        out[static_cast<std::size_t>(a)] =
+            s.from[static_cast<std::size_t>(a)] +
+            (s.to[static_cast<std::size_t>(a)] - s.from[static_cast<std::size_t>(a)]) * u;
     if (s.kind == PathSegment::Kind::Arc) {
         if (u >= 1.0) return s.to;
         const double th = s.start_rad + s.sweep_rad * u;
@@ -126,8 +148,8 @@ int sign(double v) {
 
 }  // namespace
 
-std::vector<PathSegment> parse_motion_program(std::string_view text, analysis::NcDialect dialect,
-                                              const Xyz& start_mm, double rapid_mm_min, double feed_override) {
+std::vector<PathSegment> parse_motion_program(std::string_view text, analysis::NcDialect dialect, const Xyz& start_mm,
+                                              double rapid_mm_min, double feed_override) {
     if (!(feed_override > 0)) throw std::invalid_argument("feed override must be positive");
     std::vector<PathSegment> out;
     Xyz pos = start_mm;
@@ -149,14 +171,38 @@ std::vector<PathSegment> parse_motion_program(std::string_view text, analysis::N
         bool dwell = false;
         for (int g : w.g) {
             switch (g) {
-                case 0: case 1: case 2: case 3: motion = g; break;
-                case 4: dwell = true; break;
-                case 17: p = 0, q = 1; break;
-                case 18: p = 2, q = 0; break;
-                case 19: p = 1, q = 2; break;
-                case 20: throw analysis::NcError(line_no, "G20 (inch) is not supported: programs are in mm (G21)");
-                case 91: throw analysis::NcError(line_no, "G91 (incremental) is not supported: ballbar runs G90");
-                case 21: case 90: case 94: case 40: case 49: case 80: case 54: case 61: case 64: break;
+                case 0:
+                case 1:
+                case 2:
+                case 3:
+                    motion = g;
+                    break;
+                case 4:
+                    dwell = true;
+                    break;
+                case 17:
+                    p = 0, q = 1;
+                    break;
+                case 18:
+                    p = 2, q = 0;
+                    break;
+                case 19:
+                    p = 1, q = 2;
+                    break;
+                case 20:
+                    throw analysis::NcError(line_no, "G20 (inch) is not supported: programs are in mm (G21)");
+                case 91:
+                    throw analysis::NcError(line_no, "G91 (incremental) is not supported: ballbar runs G90");
+                case 21:
+                case 90:
+                case 94:
+                case 40:
+                case 49:
+                case 80:
+                case 54:
+                case 61:
+                case 64:
+                    break;
                 default:
                     throw analysis::NcError(line_no, "unsupported G code G" + std::to_string(g) +
                                                          " (the circular test runs G0-G4, G17-G19 in G90/G21)");
@@ -191,15 +237,16 @@ std::vector<PathSegment> parse_motion_program(std::string_view text, analysis::N
         if (motion == 0) {
             s.duration_s = dist(pos, to) / rapid_mm_min * 60.0;
         } else {
-            if (!(feed > 0)) throw analysis::NcError(line_no, "G" + std::to_string(motion) + " without a feed rate (F)");
+            if (!(feed > 0))
+                throw analysis::NcError(line_no, "G" + std::to_string(motion) + " without a feed rate (F)");
             const double speed = feed * feed_override / 60.0;  // mm/s
             if (motion == 1) {
                 s.duration_s = dist(pos, to) / speed;
             } else {
                 const std::optional<double> off[3] = {w.i, w.j, w.k};
                 if (!off[p] && !off[q])
-                    throw analysis::NcError(line_no, "G" + std::to_string(motion) +
-                                                         " needs centre words (I J K) of the plane's axes");
+                    throw analysis::NcError(
+                        line_no, "G" + std::to_string(motion) + " needs centre words (I J K) of the plane's axes");
                 s.kind = PathSegment::Kind::Arc;
                 s.has_centre = true;
                 s.p = p;
@@ -436,6 +483,46 @@ std::vector<std::pair<circ::Diag, double>> ContinuousMachine::truth(circ::Plane 
     if (Q.cyclic_pitch_mm > 0 && Q.cyclic_um != 0) t.emplace_back(circ::Diag::CyclicPitchQ, Q.cyclic_pitch_mm);
     if (E.vibration_hz > 0 && E.vibration_um != 0) t.emplace_back(circ::Diag::VibrationHz, E.vibration_hz);
     return t;
+}
+
+std::vector<TruthComparison> compare_with_truth(const circ::CircularResult& result,
+                                                const std::vector<std::pair<circ::Diag, double>>& truth) {
+    std::vector<TruthComparison> out;
+    const circ::TestSpec& test = result.test;
+    for (const auto& [diag, value] : truth) {
+        TruthComparison c;
+        c.diag = diag;
+        c.key = circ::diagnostic_key(diag, test.plane);
+        c.truth = value;
+        c.injected = value != 0;
+        const bool rate =
+            diag == circ::Diag::CyclicPitchP || diag == circ::Diag::CyclicPitchQ || diag == circ::Diag::VibrationHz;
+        const double unit = circ::radial_um_per_unit(diag, test);
+        const circ::DiagnosticResult* d = result.find(diag);
+        if (d && (d->detected || !rate)) {
+            c.measured = d->detected ? d->value : 0.0;
+            c.std_uncertainty = d->std_uncertainty;
+        }
+        bool unseparable = false;
+        for (const auto& g : result.unseparable)
+            if (std::find(g.keys.begin(), g.keys.end(), c.key) != g.keys.end()) unseparable = true;
+        if (rate) {
+            c.allowed = 0.05 * std::abs(value);
+        } else {
+            const double floor_units = unit > 0 ? 0.25 / unit : 0.0;
+            c.allowed = c.injected ? std::max(0.2 * std::abs(value), floor_units) : 2.0 * floor_units;
+        }
+        if (!c.measured) {
+            c.note = unseparable ? "not separable on this data" : "not found";
+            c.pass = !c.injected;
+        } else if (c.injected) {
+            c.pass = std::abs(*c.measured - value) <= c.allowed;
+        } else {
+            c.pass = std::abs(*c.measured) <= c.allowed;
+        }
+        out.push_back(c);
+    }
+    return out;
 }
 
 }  // namespace ballbar::device

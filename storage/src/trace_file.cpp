@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -374,8 +375,18 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
         throw std::runtime_error("session " + std::to_string(session_id) + " has no test header");
     TraceFile t;
     t.test = test_from_json(meta["test"]);
-    const double reference_mm = meta.value("reference_length_mm", t.test.radius_mm);
+    double reference_mm = meta.value("reference_length_mm", t.test.radius_mm);
     const bool bar = meta.value("has_bar_temp", false);
+    // A measured session (`circle measure`) holds every sample of every run of the program; its trace is
+    // the good run's window (the last "circular.attempt" result marked good), in the instrument's length.
+    std::optional<std::pair<std::int64_t, std::int64_t>> window;
+    for (const auto& r : store.results(session_id)) {
+        if (r.kind != "circular.attempt") continue;
+        const json a = json::parse(r.payload_json, nullptr, false);
+        if (a.is_discarded() || !a.value("good", false)) continue;
+        window = std::make_pair(a.value("first_seq", std::int64_t{0}), a.value("last_seq", std::int64_t{-1}));
+        reference_mm = a.value("reference_length_mm", reference_mm);
+    }
     if (meta.contains("instrument")) t.instrument_json = meta["instrument"].dump();
     if (meta.contains("machine")) t.machine_json = meta["machine"].dump();
     if (meta.contains("extra"))
@@ -384,8 +395,11 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
     t.notes = info.notes;
     t.started_at = info.started_at;
     Statement st(store.db(),
-                 "SELECT device_time_us, displacement_nm, bar_temp_mC FROM samples WHERE session_id = ? ORDER BY seq");
+                 "SELECT device_time_us, displacement_nm, bar_temp_mC FROM samples WHERE session_id = ? AND seq >= ? "
+                 "AND seq <= ? ORDER BY seq");
     st.bind(1, session_id);
+    st.bind(2, window ? window->first : std::int64_t{0});
+    st.bind(3, window ? window->second : std::numeric_limits<std::int64_t>::max());
     while (st.step()) {
         t.samples.push_back({static_cast<double>(st.column_int(0)) * 1e-6,
                              reference_mm + static_cast<double>(st.column_int(1)) * 1e-6});
@@ -394,6 +408,14 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
     if (meta.contains("air_temp_C"))
         for (const auto& a : meta["air_temp_C"])
             t.air_temp_C.push_back(a.is_null() ? std::nullopt : std::optional<double>(a.get<double>()));
+    return t;
+}
+
+circ::TestSpec parse_test_json(std::string_view text) {
+    const json j = json::parse(text, nullptr, false);
+    if (j.is_discarded()) throw std::runtime_error("not valid JSON");
+    circ::TestSpec t = test_from_json(j);
+    if (const std::string bad = t.validate(); !bad.empty()) throw std::runtime_error(bad);
     return t;
 }
 

@@ -30,8 +30,8 @@ namespace ballbar::acquisition {
 /// One run as found in the data.
 struct CircularRun {
     analysis::circular::Direction direction = analysis::circular::Direction::Ccw;
-    double feed_in_end_s = 0;  ///< device time of the feed-in's commanded end
-    double lag_s = 0;          ///< the feed-in's fitted servo lag
+    double feed_in_end_s = 0;                   ///< device time of the feed-in's commanded end
+    double lag_s = 0;                           ///< the feed-in's fitted servo lag
     std::uint64_t first_seq = 0, last_seq = 0;  ///< source seqs from the stand before the feed-in to the feed-out
 };
 
@@ -39,7 +39,7 @@ struct CircularRun {
 struct CircularAttempt {
     int attempt = 1;
     bool good = false;
-    std::string why;  ///< why it cannot be used
+    std::string why;                            ///< why it cannot be used
     std::uint64_t first_seq = 0, last_seq = 0;  ///< source seqs of the attempt's samples (the trace when good)
     std::vector<CircularRun> runs;
 };

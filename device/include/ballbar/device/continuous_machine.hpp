@@ -14,6 +14,7 @@
 
 #include <array>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -64,8 +65,8 @@ struct PathSegment {
     enum class Kind { Line, Arc, Dwell };
     Kind kind = Kind::Line;
     Xyz from{}, to{};
-    Xyz centre{};      ///< arc: centre (the third axis's value is unused)
-    int p = 0, q = 1;  ///< arc: the plane's axes (G17 X,Y; G18 Z,X; G19 Y,Z)
+    Xyz centre{};                         ///< arc: centre (the third axis's value is unused)
+    int p = 0, q = 1;                     ///< arc: the plane's axes (G17 X,Y; G18 Z,X; G19 Y,Z)
     double start_rad = 0, sweep_rad = 0;  ///< arc: angle of `from` about the centre, signed sweep (G3 > 0)
     double r0 = 0, r1 = 0;                ///< arc: radius at the start and the end
     double duration_s = 0;
@@ -77,6 +78,23 @@ struct PathSegment {
 /// comments, "%" and O-number lines, M codes (ignored). Throws analysis::NcError with the line.
 std::vector<PathSegment> parse_motion_program(std::string_view text, analysis::NcDialect dialect, const Xyz& start_mm,
                                               double rapid_mm_min, double feed_override = 1.0);
+
+/// One diagnostic of a circular test's result against the emulator's truth, judged by the accuracy rule
+/// of docs/circular.md: an injected effect within 20 % or the equivalent of 0.25 µm of radial amplitude
+/// (whichever is larger; pitch and frequency within 5 %), an absent one reported below twice that.
+struct TruthComparison {
+    analysis::circular::Diag diag = analysis::circular::Diag::BacklashP;
+    std::string key;
+    double truth = 0;
+    std::optional<double> measured;  ///< empty: not reported (unseparable, or pitch of an undetected error)
+    double std_uncertainty = 0;
+    double allowed = 0;  ///< the allowed error (injected) or the largest allowed report (absent)
+    bool injected = false;
+    bool pass = true;
+    std::string note;
+};
+std::vector<TruthComparison> compare_with_truth(const analysis::circular::CircularResult& result,
+                                                const std::vector<std::pair<analysis::circular::Diag, double>>& truth);
 
 class ContinuousMachine {
   public:
@@ -114,13 +132,13 @@ class ContinuousMachine {
     mutable std::mutex mutex_;
     double feed_override_ = 1.0;
     std::vector<PathSegment> path_;
-    std::vector<double> t0_;   ///< start time of each path segment
-    Xyz rest_mm_;              ///< where the command stands before the path (and after it: path end)
-    Xyz socket_;               ///< nominal socket position
+    std::vector<double> t0_;  ///< start time of each path segment
+    Xyz rest_mm_;             ///< where the command stands before the path (and after it: path end)
+    Xyz socket_;              ///< nominal socket position
     // Integrator state at time now_.
     double now_ = 0;
-    Xyz axis_{};               ///< lagged axis positions
-    Xyz velocity_{};           ///< lagged axis velocities, mm/s
+    Xyz axis_{};      ///< lagged axis positions
+    Xyz velocity_{};  ///< lagged axis velocities, mm/s
     std::array<int, 3> direction_{0, 0, 0};
     std::array<double, 3> reversal_t_{-1e30, -1e30, -1e30};
     std::array<int, 3> reversal_old_{0, 0, 0};

@@ -55,6 +55,9 @@ TraceFile read_trace_file(const std::filesystem::path& path);
 std::string format_trace(const TraceFile& trace);
 /// The `test` header's JSON for `test` (one line).
 std::string test_json(const analysis::circular::TestSpec& test);
+/// A `test` header from its JSON text (`circle plan --test-out`); throws std::runtime_error naming the
+/// problem.
+analysis::circular::TestSpec parse_test_json(std::string_view text);
 
 /// A new session (procedure "circular", source `source`) holding the trace; returns its id.
 std::int64_t import_trace(Store& store, const TraceFile& trace, const std::string& file_name,

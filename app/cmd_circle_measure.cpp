@@ -1,0 +1,659 @@
+// SPDX-License-Identifier: MIT
+// `ballbar circle measure` and `ballbar demo --test circular` (circle_measure.hpp): the circular test's
+// procedure (acquisition/circular_session.hpp) on a real instrument or on the emulator's continuous
+// machine, stored as a circular session of the same shape an imported trace makes (docs/storage.md),
+// so `circle analyze SESSION`, `export --format trace` and `report SESSION` read both alike.
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "acquisition_adapters.hpp"
+#include "ballbar/acquisition/circle_program.hpp"
+#include "ballbar/acquisition/circular_session.hpp"
+#include "ballbar/device/emulator_host.hpp"
+#include "ballbar/device/uri.hpp"
+#include "ballbar/storage/sample_writer.hpp"
+#include "ballbar/storage/trace_file.hpp"
+#include "circle_measure.hpp"
+#include "circle_output.hpp"
+#include "gauge_source.hpp"
+#include "interrupt.hpp"
+#include "operators.hpp"
+#include "storage_errors.hpp"
+
+namespace ballbar::app {
+namespace {
+
+namespace acq = ballbar::acquisition;
+namespace circ = ballbar::analysis::circular;
+using json = nlohmann::ordered_json;
+
+// ---- storage ----------------------------------------------------------------------------------------
+
+/// Stores the circular procedure as it happens: every sample (SampleWriter), every transition (the
+/// audit trail), each run of the program as a result of kind "circular.attempt" with its window of
+/// stored samples; the good attempt's window is the session's trace (storage::load_trace).
+class CircleStoreSink : public acq::CircularSink {
+  public:
+    CircleStoreSink(storage::Store& store, std::int64_t id, double reference_length_mm)
+        : store_(store), id_(id), reference_mm_(reference_length_mm), writer_(store, id) {}
+
+    void set_reference_length(double mm) { reference_mm_ = mm; }
+
+    void on_transition(const acq::TransitionRecord& t) override {
+        store_.add_procedure_step(id_, {std::string(acq::to_string(t.from)), std::string(acq::to_string(t.to)),
+                                        std::string(acq::to_string(t.event)), t.detail, {}});
+    }
+    void on_samples(std::span<const analysis::BarSample> samples) override {
+        for (const auto& s : samples) {
+            const std::uint64_t stored = writer_.append(s);
+            if (runs_.empty() || s.seq != last_source_ + 1 || stored != last_stored_ + 1)
+                runs_.push_back({s.seq, stored});
+            last_source_ = s.seq;
+            last_stored_ = stored;
+        }
+    }
+    void on_attempt(const acq::CircularAttempt& a) override {
+        writer_.flush();
+        json runs = json::array();
+        for (const auto& r : a.runs)
+            runs.push_back({{"direction", circ::direction_name(r.direction)},
+                            {"feed_in_end_s", r.feed_in_end_s},
+                            {"servo_lag_ms", r.lag_s * 1e3},
+                            {"first_seq", stored(r.first_seq)},
+                            {"last_seq", stored(r.last_seq)}});
+        json j = {{"attempt", a.attempt},
+                  {"good", a.good},
+                  {"why", a.why},
+                  {"reference_length_mm", reference_mm_},
+                  {"first_seq", stored(a.first_seq)},
+                  {"last_seq", stored(a.last_seq)},
+                  {"runs", runs}};
+        store_.add_result(id_, "circular.attempt", j.dump(), std::nullopt, "ballbar circle measure/1");
+    }
+    void finish(const acq::CircularSummary& sum) {
+        writer_.flush();
+        if (sum.interrupted) {
+            store_.transition(id_, storage::SessionState::interrupted, "interrupted: " + sum.reason);
+        } else if (sum.final_state == acq::State::Done) {
+            store_.finish_session(id_);
+        } else if (sum.final_state == acq::State::Aborted) {
+            store_.abort_session(id_, sum.reason.empty() ? "abort" : "abort: " + sum.reason);
+        } else {
+            store_.fail_session(id_, "fail: " + sum.reason);
+        }
+    }
+
+  private:
+    std::int64_t stored(std::uint64_t source_seq) const {
+        auto it = std::upper_bound(runs_.begin(), runs_.end(), source_seq,
+                                   [](std::uint64_t q, const SeqRun& r) { return q < r.source; });
+        if (it == runs_.begin()) return -1;
+        --it;
+        return static_cast<std::int64_t>(it->stored + (source_seq - it->source));
+    }
+    struct SeqRun {
+        std::uint64_t source = 0, stored = 0;
+    };
+    storage::Store& store_;
+    std::int64_t id_;
+    double reference_mm_;
+    storage::SampleWriter writer_;
+    std::vector<SeqRun> runs_;
+    std::uint64_t last_source_ = 0, last_stored_ = 0;
+};
+
+/// A new circular session holding the test header, as `import` makes one (plus the part program).
+std::int64_t create_circular_session(storage::Store& store, const circ::TestSpec& test, analysis::NcDialect dialect,
+                                     double dwell_s, storage::SessionSource source, const std::string& operator_name,
+                                     const std::string& notes) {
+    storage::NewSession ns;
+    ns.machine.name = "circular test";
+    ns.source = source;
+    ns.operator_name = operator_name;
+    ns.procedure = "circular";
+    ns.notes = notes;
+    const json meta = {{"format", "ballbar-trace/1"},
+                       {"test", json::parse(storage::test_json(test))},
+                       {"reference_length_mm", test.radius_mm},
+                       {"has_bar_temp", true},
+                       {"part_program", {{"dialect", analysis::to_string(dialect)}, {"dwell_s", dwell_s}}},
+                       {"extra", json::object()}};
+    ns.metadata_json = meta.dump();
+    const std::int64_t id = store.create_session(ns);
+    store.start_session(id);
+    return id;
+}
+
+// ---- the operator -------------------------------------------------------------------------------------
+
+/// The circular procedure's operator: at a terminal (prompts), scripted (every answer yes, logged), or
+/// as JSON event lines (answers from stdin, or scripted). The part program is written to `program_path`
+/// when the operator is told to run it.
+class CircleOperator : public acq::Operator {
+  public:
+    enum class Mode { Terminal, Scripted, Json, JsonScripted, Quiet };
+    CircleOperator(Mode mode, std::istream& in, std::ostream& out, bool tty, std::string program_path,
+                   std::string program_text)
+        : mode_(mode),
+          in_(in),
+          out_(out),
+          tty_(tty),
+          path_(std::move(program_path)),
+          program_(std::move(program_text)) {}
+
+    bool confirm(std::string_view what, std::string_view prompt) override {
+        end_line();
+        if (mode_ == Mode::Json || mode_ == Mode::JsonScripted) {
+            json j = {{"event", "question"}, {"what", what}, {"prompt", prompt}, {"options", {"yes", "no"}}};
+            bool yes = true;
+            if (mode_ == Mode::Json) {
+                emit(j);
+                const auto a = read_choice(in_, out_, {"yes", "no"});
+                yes = a && *a == 0;
+            }
+            j["event"] = "answer";
+            j["answer"] = yes ? "yes" : "no";
+            emit(j);
+            return yes;
+        }
+        if (mode_ == Mode::Quiet) return true;
+        if (mode_ == Mode::Scripted) {
+            out_ << prompt << " [yes]" << std::endl;
+            return true;
+        }
+        out_ << prompt << " [yes/no] " << std::flush;
+        const auto a = read_choice(in_, out_, {"yes", "no"});
+        if (!a) out_ << "\n";
+        return a && *a == 0;
+    }
+    std::size_t choose(const acq::Choice& c) override {
+        end_line();
+        if (mode_ == Mode::Terminal || mode_ == Mode::Json) {
+            if (mode_ == Mode::Json)
+                emit({{"event", "question"}, {"what", c.what}, {"prompt", c.prompt}, {"options", c.options}});
+            else
+                out_ << c.prompt << "\n? " << std::flush;
+            const auto a = read_choice(in_, out_, c.options);
+            return a ? *a : c.options.size() - 1;
+        }
+        if (mode_ == Mode::Scripted) out_ << c.prompt << " [" << c.options[c.default_option] << "]\n";
+        if (mode_ == Mode::JsonScripted)
+            emit({{"event", "answer"}, {"what", c.what}, {"answer", c.options[c.default_option]}});
+        return c.default_option;
+    }
+    void message(std::string_view text) override {
+        end_line();
+        if (mode_ == Mode::Quiet) return;
+        if (mode_ == Mode::Json || mode_ == Mode::JsonScripted)
+            emit({{"event", "message"}, {"text", text}});
+        else
+            out_ << text << std::endl;
+    }
+    acq::PointFailureAction point_failed(const acq::CapturedPoint&, std::string_view) override {
+        return acq::PointFailureAction::Retry;
+    }
+    void wait_at_point(const acq::PlannedPoint&) override {}
+    void run_program(const analysis::NcProgram&, std::span<const std::size_t>, bool) override {}
+    void program_stop(const acq::ProgramStop&) override {}
+    void progress(const acq::Progress& p) override {
+        if (mode_ == Mode::Json || mode_ == Mode::JsonScripted) {
+            if (p.done != last_done_) emit({{"event", "progress"}, {"runs_done", p.done}, {"runs", p.total}});
+            last_done_ = p.done;
+            return;
+        }
+        if (!tty_ || mode_ == Mode::Quiet) return;
+        out_ << "\r  runs " << p.done << "/" << p.total << "  bar " << std::fixed << std::setprecision(4) << p.live_mm
+             << " mm" << (p.out_of_range ? " (out of range)" : "") << "   " << std::flush;
+        line_ = true;
+    }
+    void run_part_program(std::string_view what, bool retry) override {
+        end_line();
+        if (!path_.empty()) {
+            std::ofstream f(path_, std::ios::binary | std::ios::trunc);
+            f << program_;
+            if (!f) throw acq::SourceError("cannot write the part program to " + path_);
+        }
+        if (mode_ == Mode::Json || mode_ == Mode::JsonScripted) {
+            emit({{"event", "run_program"}, {"retry", retry}, {"program", path_}, {"what", what}});
+            return;
+        }
+        if (mode_ == Mode::Quiet) return;
+        out_ << what;
+        if (!path_.empty()) out_ << " (program: " << path_ << ")";
+        out_ << std::endl;
+    }
+
+  private:
+    void emit(const json& j) { out_ << j.dump() << std::endl; }
+    void end_line() {
+        if (line_) out_ << "\n";
+        line_ = false;
+    }
+    Mode mode_;
+    std::istream& in_;
+    std::ostream& out_;
+    bool tty_;
+    std::string path_, program_;
+    bool line_ = false;
+    std::size_t last_done_ = static_cast<std::size_t>(-1);
+};
+
+// ---- after the procedure ---------------------------------------------------------------------------
+
+/// The stored session's trace analysed as `circle analyze SESSION` does, the result stored with it.
+std::pair<circ::CircularResult, storage::TraceFile> analyze_stored(storage::Store& store, std::int64_t id,
+                                                                   json* result_json) {
+    storage::TraceFile trace = storage::load_trace(store, id);
+    circ::CircularResult r;
+    try {
+        r = circ::analyze_circular(trace.test, trace.samples);
+    } catch (const circ::CircularError& e) {
+        throw CliError(kExitFailure, "session " + std::to_string(id) + ": the stored trace: " + e.what());
+    }
+    json j = circle_result_json(r, trace, std::nullopt);
+    store.add_result(id, "circular", j.dump(), std::nullopt, "ballbar circular/1");
+    j["session"] = id;
+    if (result_json) *result_json = j;
+    return {r, trace};
+}
+
+int outcome(const acq::CircularSummary& sum, std::int64_t id, const std::string& resume_hint) {
+    if (sum.final_state == acq::State::Done) return kExitOk;
+    if (sum.interrupted)
+        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " interrupted after " +
+                                             std::to_string(sum.samples) + " samples (" + sum.reason +
+                                             "); everything measured is stored. Continue it with: " + resume_hint);
+    if (sum.refused) throw CliError(kExitUsage, "session " + std::to_string(id) + ": " + sum.reason);
+    if (sum.final_state == acq::State::Aborted)
+        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " aborted: " + sum.reason);
+    throw CliError(kExitFailure, "session " + std::to_string(id) + " failed: " + sum.reason);
+}
+
+// ---- circle measure ------------------------------------------------------------------------------------
+
+struct MeasureOptions {
+    std::string device;
+    std::string test_file;
+    std::string plane = "XY";
+    double radius_mm = 100;
+    std::vector<double> centre_mm{0, 0, 0};
+    double feed_mm_min = 1000;
+    double feed_in_mm = 1.5;
+    double arc_deg = 360;
+    std::string dialect = "fanuc";
+    double dwell_s = 1.0;
+    std::string program_file;
+    std::string resume;
+    std::string operator_name;
+    bool non_interactive = false;
+    bool json = false;
+};
+
+circ::TestSpec test_from_options(const MeasureOptions& o) {
+    if (!o.test_file.empty()) {
+        try {
+            return storage::parse_test_json(read_file(o.test_file, "test header"));
+        } catch (const CliError&) {
+            throw;
+        } catch (const std::exception& e) {
+            throw CliError(kExitUsage, o.test_file + ": " + e.what());
+        }
+    }
+    circ::TestSpec t;
+    const auto plane = circ::parse_plane(o.plane);
+    if (!plane) throw CliError(kExitUsage, "--plane must be XY, YZ or ZX");
+    t.plane = *plane;
+    t.radius_mm = o.radius_mm;
+    if (o.centre_mm.size() != 3) throw CliError(kExitUsage, "--centre needs three numbers X Y Z");
+    t.centre_mm = {o.centre_mm[0], o.centre_mm[1], o.centre_mm[2]};
+    t.feed_mm_min = o.feed_mm_min;
+    t.feed_in_mm = o.feed_in_mm;
+    const bool full = o.arc_deg >= 360.0;
+    const double over = full ? 45.0 : 20.0, start = full ? 0.0 : -over;
+    t.runs = {{circ::Direction::Ccw, start, over, o.arc_deg},
+              {circ::Direction::Cw, start + 2 * over + o.arc_deg, over, o.arc_deg}};
+    if (const auto bad = t.validate(); !bad.empty()) throw CliError(kExitUsage, bad);
+    return t;
+}
+
+int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
+    if (o.device.empty()) throw CliError(kExitUsage, "--device URI is required");
+    storage::Store store(resolve_db_path(globals));
+    circ::TestSpec test;
+    std::int64_t id = 0;
+    int first_attempt = 1;
+    auto dialect = analysis::parse_nc_dialect(o.dialect);
+    if (!dialect) throw CliError(kExitUsage, "--dialect must be fanuc or linuxcnc");
+    double dwell_s = o.dwell_s;
+    if (!(dwell_s >= 0.2 && dwell_s <= 60)) throw CliError(kExitUsage, "--dwell must be 0.2 .. 60 s");
+    try {
+        if (!o.resume.empty()) {
+            id = store.find_session(o.resume);
+            const storage::SessionInfo before = store.session(id);
+            if (before.procedure != "circular")
+                throw CliError(kExitUsage, "session " + std::to_string(id) + " is not a circular test (procedure \"" +
+                                               before.procedure + "\"): resume it with ballbar measure");
+            if (!before.resumable())
+                throw CliError(kExitUsage, "session " + std::to_string(id) + " is " + storage::to_string(before.state) +
+                                               ": only an interrupted or failed session can be resumed");
+            std::cout << "Session " << id << " is " << storage::to_string(before.state)
+                      << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
+            test = storage::load_trace(store, id).test;
+            const json meta = json::parse(before.metadata_json.empty() ? "{}" : before.metadata_json);
+            if (meta.contains("part_program")) {
+                dialect = analysis::parse_nc_dialect(meta["part_program"].value("dialect", "fanuc"));
+                dwell_s = meta["part_program"].value("dwell_s", dwell_s);
+            }
+            for (const auto& r : store.results(id))
+                if (r.kind == "circular.attempt") ++first_attempt;
+            store.resume_session(id);
+        } else {
+            test = test_from_options(o);
+            id = create_circular_session(
+                store, test, *dialect, dwell_s,
+                o.device.rfind("emulator:", 0) == 0 ? storage::SessionSource::emulator : storage::SessionSource::device,
+                o.operator_name, "circle measure");
+        }
+    } catch (const storage::StorageError& e) {
+        throw cli_error(e);
+    } catch (const std::runtime_error& e) {
+        if (dynamic_cast<const CliError*>(&e)) throw;
+        throw CliError(kExitUsage, e.what());
+    }
+    const std::string program_path =
+        o.program_file.empty() ? "ballbar-session-" + std::to_string(id) + ".nc" : o.program_file;
+    const std::string program = acq::circular_program(test, dialect.value_or(analysis::NcDialect::Fanuc), dwell_s);
+    if (!o.json)
+        std::cout << "Session " << id << ": circular test in " << circ::plane_name(test.plane) << ", radius "
+                  << test.radius_mm << " mm, feed " << test.feed_mm_min << " mm/min, " << test.runs.size()
+                  << " runs.\n";
+    const auto mode = o.json ? (o.non_interactive ? CircleOperator::Mode::JsonScripted : CircleOperator::Mode::Json)
+                      : o.non_interactive ? CircleOperator::Mode::Scripted
+                                          : CircleOperator::Mode::Terminal;
+    CircleOperator op(mode, std::cin, std::cout, globals.color, program_path, program);
+    CircleStoreSink sink(store, id, test.radius_mm);
+    const std::string uri = o.device;
+    DeviceSource source([uri] {
+        try {
+            return device::open_transport(uri);
+        } catch (const std::invalid_argument& e) {
+            throw acq::SourceError(e.what());
+        }
+    });
+    source.on_identified = [&store, id, &sink](const device::InstrumentInfo& info) {
+        storage::Instrument inst;
+        inst.model = info.model;
+        inst.serial = info.serial;
+        inst.firmware = info.firmware;
+        inst.calibrated_length_mm = info.calibrated_length_mm;
+        inst.calibration_date = info.calibration_date;
+        store.set_instrument(id, inst);
+        sink.set_reference_length(info.calibrated_length_mm);
+    };
+    const auto gauge = make_gauge_source(uri, test.radius_mm);  // a digital gauge on the bar (gauge_source.hpp)
+    const InterruptGuard interrupt;
+    acq::CircularOptions options;
+    options.stop = InterruptGuard::flag();
+    options.dwell_s = dwell_s;
+    options.first_attempt = first_attempt;
+    const std::uint64_t first_seq = store.next_seq(id);
+    acq::CircularSession session(test, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
+    const acq::CircularSummary sum = session.run();
+    sink.finish(sum);
+    if (gauge) store_gauge_instrument(store, id, *gauge, first_seq);
+    outcome(sum, id, "ballbar circle measure --resume " + std::to_string(id) + " --device " + o.device);
+    json j;
+    const auto [result, trace] = analyze_stored(store, id, &j);
+    if (o.json) {
+        std::cout << json{{"event", "done"}, {"session", id}, {"samples", sum.samples}, {"attempts", sum.attempts},
+                          {"result", j}}
+                         .dump()
+                  << std::endl;
+    } else {
+        print_circle_result(std::cout, result, trace, std::nullopt);
+        std::cout << "Session " << id << " completed (" << sum.samples << " samples, " << sum.attempts
+                  << (sum.attempts == 1 ? " run" : " runs") << " of the program); result stored.\n";
+    }
+    return kExitOk;
+}
+
+// ---- demo --test circular ------------------------------------------------------------------------------
+
+/// The emulator on a pty, served by a thread of this process on simulated time (as `demo` does).
+class PtyServedEmulator {
+  public:
+    explicit PtyServedEmulator(device::EmulatorConfig config) : emu_(std::move(config)) {
+        device::HostOptions ho;
+        ho.pacing = device::Pacing::Simulated;
+        ho.stop = &stop_;
+        host_ = std::make_unique<device::EmulatorHost>(emu_, ho);
+        thread_ = std::thread([this] {
+            try {
+                host_->run_pty([this](const std::string& path) {
+                    std::lock_guard lock(mutex_);
+                    path_ = path;
+                    cv_.notify_all();
+                });
+            } catch (const std::exception& e) {
+                std::lock_guard lock(mutex_);
+                error_ = e.what();
+                cv_.notify_all();
+            }
+        });
+    }
+    ~PtyServedEmulator() { halt(); }
+    PtyServedEmulator(const PtyServedEmulator&) = delete;
+    PtyServedEmulator& operator=(const PtyServedEmulator&) = delete;
+    void halt() {
+        stop_ = true;
+        if (thread_.joinable()) thread_.join();
+    }
+    std::string path() {
+        std::unique_lock lock(mutex_);
+        if (!cv_.wait_for(lock, std::chrono::seconds(10), [this] { return !path_.empty() || !error_.empty(); }))
+            throw CliError(kExitFailure, "the emulator did not open a pseudo-terminal");
+        if (!error_.empty()) throw CliError(kExitFailure, "emulator: " + error_);
+        return path_;
+    }
+    device::Emulator& emulator() { return emu_; }
+
+  private:
+    device::Emulator emu_;
+    std::atomic<bool> stop_{false};
+    std::unique_ptr<device::EmulatorHost> host_;
+    std::thread thread_;
+    std::mutex mutex_;
+    std::condition_variable cv_;
+    std::string path_, error_;
+};
+
+/// The demo's machine: every effect of trace.md at once, each at a few µm of radial amplitude.
+device::ContinuousErrors demo_errors() {
+    device::ContinuousErrors e;
+    const double lag[3] = {8.0, 5.0, 6.5}, backlash[3] = {3.0, -2.0, 2.5}, spike[3] = {2.0, 1.5, 1.8},
+                 scale[3] = {15.0, -10.0, 8.0}, cyclic[3] = {0.8, 0.0, 0.7}, pitch[3] = {6.0, 0.0, 5.0};
+    for (std::size_t a = 0; a < 3; ++a) {
+        e.axis[a].servo_lag_ms = lag[a];
+        e.axis[a].backlash_um = backlash[a];
+        e.axis[a].reversal_spike_um = spike[a];
+        e.axis[a].scale_ppm = scale[a];
+        e.axis[a].cyclic_um = cyclic[a];
+        e.axis[a].cyclic_pitch_mm = pitch[a];
+        e.axis[a].cyclic_phase_deg = 30.0 * static_cast<double>(a);
+    }
+    e.squareness_um_per_m = {25.0, -20.0, 30.0};
+    e.straightness_um_per_m2[0][1] = 150.0;   // X bows in Y
+    e.straightness_um_per_m2[1][2] = -120.0;  // Y bows in Z
+    e.straightness_um_per_m2[2][0] = 100.0;   // Z bows in X
+    e.vibration_um = 0.6;
+    e.vibration_hz = 31.0;
+    return e;
+}
+
+}  // namespace
+
+int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
+    const auto plane = circ::parse_plane(o.plane);
+    if (!plane) throw CliError(kExitUsage, "--plane must be XY, YZ or ZX");
+    const double arc = o.arc_deg > 0 ? o.arc_deg : (*plane == circ::Plane::XY ? 360.0 : 180.0);
+    MeasureOptions mo;
+    mo.plane = o.plane;
+    mo.radius_mm = o.radius_mm;
+    mo.feed_mm_min = o.feed_mm_min;
+    mo.feed_in_mm = 0.8;  // the bar's ±1 mm range holds the stand at R + feed-in
+    mo.arc_deg = arc;
+    const circ::TestSpec test = test_from_options(mo);
+    const auto dialect = analysis::NcDialect::Fanuc;
+    const double dwell_s = 1.0;
+
+    device::EmulatorConfig cfg;
+    cfg.seed = o.seed;
+    cfg.instrument.calibrated_length_mm = test.radius_mm;
+    cfg.instrument.noise_um = 0.15;
+    cfg.instrument.serial = "EMU" + std::to_string(10000 + ::getpid() % 90000);
+    cfg.continuous = demo_errors();
+    cfg.machine.socket_offset_mm = analysis::Vec3(0.012, -0.008, 0.015);
+    const auto ax = circ::plane_axis_index(test.plane);
+    analysis::Vec3 start(test.centre_mm[0], test.centre_mm[1], test.centre_mm[2]);
+    const double a0 = analysis::deg_to_rad(test.runs.front().start_deg);
+    start[ax[0]] += (test.radius_mm + test.feed_in_mm) * std::cos(a0);
+    start[ax[1]] += (test.radius_mm + test.feed_in_mm) * std::sin(a0);
+    cfg.machine.start = {start.x(), start.y(), start.z(), 0, 0, 0};
+    cfg.program = device::NcSource{acq::circular_program(test, dialect, dwell_s), dialect, false, ""};
+    if (!o.faults.empty()) {
+        std::string text = o.faults;
+        const auto first = text.find_first_not_of(" \t\n");
+        if (first == std::string::npos || text[first] != '{') text = read_file(o.faults, "faults file");
+        try {
+            cfg.faults = device::parse_emulator_config("{\"faults\": " + text + "}").faults;
+        } catch (const std::invalid_argument& e) {
+            throw CliError(kExitUsage, std::string("--faults: ") + e.what());
+        }
+    }
+    PtyServedEmulator emulator(cfg);
+
+    storage::StoreOptions so;
+    so.sync_full = false;
+    storage::Store store(resolve_db_path(globals), so);
+    const std::int64_t id =
+        create_circular_session(store, test, dialect, dwell_s, storage::SessionSource::emulator, "demo",
+                                "ballbar demo --test circular --plane " + o.plane + " --seed " + std::to_string(o.seed));
+    const bool show = !o.json && ::isatty(STDERR_FILENO);
+    if (!o.json)
+        std::cout << "ballbar demo --test circular: " << circ::plane_name(test.plane) << ", radius " << test.radius_mm
+                  << " mm, feed " << test.feed_mm_min << " mm/min, data arc " << arc << "°; emulator on "
+                  << emulator.path() << "\n";
+    std::ostringstream discard;
+    CircleOperator op(show ? CircleOperator::Mode::Scripted : CircleOperator::Mode::Quiet, std::cin,
+                      show ? std::cerr : static_cast<std::ostream&>(discard), false, "", "");
+    DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
+    CircleStoreSink sink(store, id, test.radius_mm);
+    source.on_identified = [&sink](const device::InstrumentInfo& info) {
+        sink.set_reference_length(info.calibrated_length_mm);
+    };
+    acq::CircularOptions options;
+    options.dwell_s = dwell_s;
+    acq::CircularSession session(test, source, sink, op, options);
+    const acq::CircularSummary sum = session.run();
+    sink.finish(sum);
+    emulator.halt();
+    outcome(sum, id, "ballbar demo --test circular (a demo session is not resumed)");
+
+    json stored;
+    const auto [result, trace] = analyze_stored(store, id, &stored);
+    const auto checks = device::compare_with_truth(result, emulator.emulator().continuous()->truth(test.plane, test.radius_mm));
+    bool pass = true;
+    json diags = json::array();
+    for (const auto& c : checks) {
+        pass = pass && c.pass;
+        diags.push_back({{"key", c.key},
+                         {"unit", circ::diagnostic_unit(c.diag)},
+                         {"measured", c.measured ? json(*c.measured) : json(nullptr)},
+                         {"std_uncertainty", c.measured ? json(c.std_uncertainty) : json(nullptr)},
+                         {"truth", c.truth},
+                         {"allowed_error", c.allowed},
+                         {"injected", c.injected},
+                         {"pass", c.pass},
+                         {"note", c.note}});
+    }
+    const auto& ec = emulator.emulator().counters();
+    json out = {{"session", id},
+                {"plane", circ::plane_name(test.plane)},
+                {"radius_mm", test.radius_mm},
+                {"feed_mm_min", test.feed_mm_min},
+                {"data_arc_deg", arc},
+                {"attempts", sum.attempts},
+                {"samples", sum.samples},
+                {"pauses", sum.pauses},
+                {"gaps", sum.gaps},
+                {"duplicates_dropped", sum.duplicates_dropped},
+                {"dropped_frames", ec.dropped_frames},
+                {"replayed_frames", ec.replayed_frames},
+                {"circularity_um", json::array()},
+                {"bidirectional_circularity_um", stored["bidirectional_circularity_um"]},
+                {"diagnostics", diags},
+                {"pass", pass}};
+    for (const auto& r : result.runs)
+        out["circularity_um"].push_back({{"direction", circ::direction_name(r.direction)}, {"G", r.circularity_um}});
+    if (o.json) {
+        std::cout << out.dump() << std::endl;
+    } else {
+        std::printf("\nDiagnostics against the emulator's truth (rule of docs/circular.md: 20 %% or 0.25 µm radial;\n"
+                    "pitch and frequency 5 %%; where nothing was injected, below twice that):\n");
+        std::printf("  %-28s %12s %10s %12s %10s  %s\n", "diagnostic", "measured", "± u", "truth", "allowed", "");
+        for (const auto& c : checks) {
+            std::printf("  %-28s %12s %10s %12.3f %10.3f  %s\n", c.key.c_str(),
+                        c.measured ? std::to_string(std::round(*c.measured * 1000) / 1000).substr(0, 10).c_str()
+                                   : c.note.c_str(),
+                        c.measured ? std::to_string(std::round(c.std_uncertainty * 1000) / 1000).substr(0, 8).c_str()
+                                   : "",
+                        c.truth, c.allowed, c.pass ? "ok" : "MISSED");
+        }
+        for (const auto& r : result.runs)
+            std::printf("G %s: %.3f µm\n", circ::direction_name(r.direction), r.circularity_um);
+        if (result.bidirectional_um) std::printf("G(b): %.3f µm\n", *result.bidirectional_um);
+        std::printf("Session %lld stored in %s (%zu samples, %d run%s of the program).\n", static_cast<long long>(id),
+                    store.path().c_str(), sum.samples, sum.attempts, sum.attempts == 1 ? "" : "s");
+    }
+    if (!pass)
+        throw CliError(kExitFailure, "demo session " + std::to_string(id) +
+                                         ": a diagnostic missed the emulator's truth by more than the accuracy rule");
+    return kExitOk;
+}
+
+void add_circle_measure(CLI::App& circle, Globals& globals) {
+    auto o = std::make_shared<MeasureOptions>();
+    auto* m = circle.add_subcommand("measure", "Measure a circular test on an instrument (guided)");
+    m->add_option("--device", o->device, "Instrument URI (serial:PATH, tcp:HOST:PORT, usb:…, sylvac:PATH, …)");
+    m->add_option("--test", o->test_file, "the test header (JSON) of `circle plan --test-out`");
+    m->add_option("--plane", o->plane, "XY, YZ or ZX (without --test)")->capture_default_str();
+    m->add_option("--radius", o->radius_mm, "programmed radius = bar length, mm")->capture_default_str();
+    m->add_option("--centre", o->centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
+    m->add_option("--feed", o->feed_mm_min, "feed, mm/min")->capture_default_str();
+    m->add_option("--feed-in", o->feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
+    m->add_option("--arc", o->arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
+        ->capture_default_str();
+    m->add_option("--dialect", o->dialect, "part program dialect: fanuc or linuxcnc")->capture_default_str();
+    m->add_option("--dwell", o->dwell_s, "stand before each feed-in, s")->capture_default_str();
+    m->add_option("--program", o->program_file, "where to write the part program (default ballbar-session-ID.nc)");
+    m->add_option("--resume", o->resume, "continue an interrupted circular session (id or uuid prefix)");
+    m->add_option("--operator", o->operator_name, "operator name stored with the session");
+    m->add_flag("--non-interactive", o->non_interactive, "answer every question yes (logged)");
+    m->add_flag("--json", o->json, "events as JSON lines on stdout (answers from stdin unless --non-interactive)");
+    m->callback([o, &globals] { globals.action = [o, &globals] { return run_circle_measure(*o, globals); }; });
+}
+
+}  // namespace ballbar::app
