@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -44,21 +45,46 @@ using json = nlohmann::ordered_json;
 
 /// Stores the circular procedure as it happens: every sample (SampleWriter), every transition (the
 /// audit trail), each run of the program as a result of kind "circular.attempt" with its window of
-/// stored samples; the good attempt's window is the session's trace (storage::load_trace).
+/// stored samples; the good attempt's window is the session's trace (storage::load_trace). A new session
+/// is created only once the instrument is accepted for the test (`create`), so a refused test leaves
+/// none; the transitions before are kept for it.
 class CircleStoreSink : public acq::CircularSink {
   public:
+    using Create = std::function<std::int64_t()>;
+    CircleStoreSink(storage::Store& store, Create create, double reference_length_mm)
+        : store_(store), create_(std::move(create)), reference_mm_(reference_length_mm) {}
     CircleStoreSink(storage::Store& store, std::int64_t id, double reference_length_mm)
-        : store_(store), id_(id), reference_mm_(reference_length_mm), writer_(store, id) {}
+        : store_(store), id_(id), reference_mm_(reference_length_mm) {
+        writer_.emplace(store_, id);
+    }
 
-    void set_reference_length(double mm) { reference_mm_ = mm; }
+    std::optional<std::int64_t> id() const { return id_; }
+    /// The instrument identified: its length is the samples' reference; it is the session's instrument.
+    void identified(const device::InstrumentInfo& info) {
+        reference_mm_ = info.calibrated_length_mm;
+        storage::Instrument inst;
+        inst.model = info.model;
+        inst.serial = info.serial;
+        inst.firmware = info.firmware;
+        inst.calibrated_length_mm = info.calibrated_length_mm;
+        inst.calibration_date = info.calibration_date;
+        instrument_ = inst;
+        if (id_) store_.set_instrument(*id_, inst);
+    }
 
+    void on_instrument_accepted(const acq::InstrumentStatus&) override { ensure(); }
     void on_transition(const acq::TransitionRecord& t) override {
-        store_.add_procedure_step(id_, {std::string(acq::to_string(t.from)), std::string(acq::to_string(t.to)),
-                                        std::string(acq::to_string(t.event)), t.detail, {}});
+        const storage::ProcedureStep step{std::string(acq::to_string(t.from)), std::string(acq::to_string(t.to)),
+                                          std::string(acq::to_string(t.event)), t.detail, store_.now_iso8601()};
+        if (id_)
+            store_.add_procedure_step(*id_, step);
+        else
+            pending_.push_back(step);
     }
     void on_samples(std::span<const analysis::BarSample> samples) override {
+        ensure();
         for (const auto& s : samples) {
-            const std::uint64_t stored = writer_.append(s);
+            const std::uint64_t stored = writer_->append(s);
             if (runs_.empty() || s.seq != last_source_ + 1 || stored != last_stored_ + 1)
                 runs_.push_back({s.seq, stored});
             last_source_ = s.seq;
@@ -66,7 +92,8 @@ class CircleStoreSink : public acq::CircularSink {
         }
     }
     void on_attempt(const acq::CircularAttempt& a) override {
-        writer_.flush();
+        ensure();
+        writer_->flush();
         json runs = json::array();
         for (const auto& r : a.runs)
             runs.push_back({{"direction", circ::direction_name(r.direction)},
@@ -81,22 +108,32 @@ class CircleStoreSink : public acq::CircularSink {
                   {"first_seq", stored(a.first_seq)},
                   {"last_seq", stored(a.last_seq)},
                   {"runs", runs}};
-        store_.add_result(id_, "circular.attempt", j.dump(), std::nullopt, "ballbar circle measure/1");
+        store_.add_result(*id_, "circular.attempt", j.dump(), std::nullopt, "ballbar circle measure/1");
     }
     void finish(const acq::CircularSummary& sum) {
-        writer_.flush();
+        if (!id_) return;  // refused before a session was made: nothing to store
+        writer_->flush();
+        const std::int64_t id = *id_;
         if (sum.interrupted) {
-            store_.transition(id_, storage::SessionState::interrupted, "interrupted: " + sum.reason);
+            store_.transition(id, storage::SessionState::interrupted, "interrupted: " + sum.reason);
         } else if (sum.final_state == acq::State::Done) {
-            store_.finish_session(id_);
+            store_.finish_session(id);
         } else if (sum.final_state == acq::State::Aborted) {
-            store_.abort_session(id_, sum.reason.empty() ? "abort" : "abort: " + sum.reason);
+            store_.abort_session(id, sum.reason.empty() ? "abort" : "abort: " + sum.reason);
         } else {
-            store_.fail_session(id_, "fail: " + sum.reason);
+            store_.fail_session(id, "fail: " + sum.reason);
         }
     }
 
   private:
+    void ensure() {
+        if (id_) return;
+        id_ = create_();
+        writer_.emplace(store_, *id_);
+        if (instrument_) store_.set_instrument(*id_, *instrument_);
+        for (const auto& step : pending_) store_.add_procedure_step(*id_, step);
+        pending_.clear();
+    }
     std::int64_t stored(std::uint64_t source_seq) const {
         auto it = std::upper_bound(runs_.begin(), runs_.end(), source_seq,
                                    [](std::uint64_t q, const SeqRun& r) { return q < r.source; });
@@ -108,9 +145,12 @@ class CircleStoreSink : public acq::CircularSink {
         std::uint64_t source = 0, stored = 0;
     };
     storage::Store& store_;
-    std::int64_t id_;
+    Create create_;
+    std::optional<std::int64_t> id_;
     double reference_mm_;
-    storage::SampleWriter writer_;
+    std::optional<storage::SampleWriter> writer_;
+    std::optional<storage::Instrument> instrument_;
+    std::vector<storage::ProcedureStep> pending_;
     std::vector<SeqRun> runs_;
     std::uint64_t last_source_ = 0, last_stored_ = 0;
 };
@@ -219,6 +259,7 @@ class CircleOperator : public acq::Operator {
              << " mm" << (p.out_of_range ? " (out of range)" : "") << "   " << std::flush;
         line_ = true;
     }
+    void set_program_path(std::string path) { path_ = std::move(path); }
     void run_part_program(std::string_view what, bool retry) override {
         end_line();
         if (!path_.empty()) {
@@ -270,16 +311,19 @@ std::pair<circ::CircularResult, storage::TraceFile> analyze_stored(storage::Stor
     return {r, trace};
 }
 
-int outcome(const acq::CircularSummary& sum, std::int64_t id, const std::string& resume_hint) {
-    if (sum.final_state == acq::State::Done) return kExitOk;
+void outcome(const acq::CircularSummary& sum, std::optional<std::int64_t> id, const std::string& resume_hint) {
+    if (sum.final_state == acq::State::Done) return;
+    if (!id) {  // refused or failed before the session was made: nothing stored
+        throw CliError(sum.refused ? kExitUsage : kExitFailure, sum.reason);
+    }
+    const std::string session = "session " + std::to_string(*id);
     if (sum.interrupted)
-        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " interrupted after " +
-                                             std::to_string(sum.samples) + " samples (" + sum.reason +
+        throw CliError(kExitInterrupted, session + " interrupted after " + std::to_string(sum.samples) + " samples (" +
+                                             sum.reason +
                                              "); everything measured is stored. Continue it with: " + resume_hint);
-    if (sum.refused) throw CliError(kExitUsage, "session " + std::to_string(id) + ": " + sum.reason);
-    if (sum.final_state == acq::State::Aborted)
-        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " aborted: " + sum.reason);
-    throw CliError(kExitFailure, "session " + std::to_string(id) + " failed: " + sum.reason);
+    if (sum.refused) throw CliError(kExitUsage, session + ": " + sum.reason);
+    if (sum.final_state == acq::State::Aborted) throw CliError(kExitInterrupted, session + " aborted: " + sum.reason);
+    throw CliError(kExitFailure, session + " failed: " + sum.reason);
 }
 
 // ---- circle measure ------------------------------------------------------------------------------------
@@ -333,7 +377,7 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     if (o.device.empty()) throw CliError(kExitUsage, "--device URI is required");
     storage::Store store(resolve_db_path(globals));
     circ::TestSpec test;
-    std::int64_t id = 0;
+    std::optional<std::int64_t> resumed;
     int first_attempt = 1;
     auto dialect = analysis::parse_nc_dialect(o.dialect);
     if (!dialect) throw CliError(kExitUsage, "--dialect must be fanuc or linuxcnc");
@@ -341,16 +385,17 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     if (!(dwell_s >= 0.2 && dwell_s <= 60)) throw CliError(kExitUsage, "--dwell must be 0.2 .. 60 s");
     try {
         if (!o.resume.empty()) {
-            id = store.find_session(o.resume);
+            const std::int64_t id = store.find_session(o.resume);
             const storage::SessionInfo before = store.session(id);
             if (before.procedure != "circular")
                 throw CliError(kExitUsage, "session " + std::to_string(id) + " is not a circular test (procedure \"" +
                                                before.procedure + "\"): resume it with ballbar measure");
             if (!before.resumable())
-                throw CliError(kExitUsage, "session " + std::to_string(id) + " is " + storage::to_string(before.state) +
+                throw CliError(kExitUsage, "session " + std::to_string(id) + " is " +
+                                               std::string(storage::to_string(before.state)) +
                                                ": only an interrupted or failed session can be resumed");
             std::cout << "Session " << id << " is " << storage::to_string(before.state)
-                      << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
+                      << (before.reason.empty() ? "" : ": " + before.reason) << std::endl;
             test = storage::load_trace(store, id).test;
             const json meta = json::parse(before.metadata_json.empty() ? "{}" : before.metadata_json);
             if (meta.contains("part_program")) {
@@ -360,12 +405,9 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
             for (const auto& r : store.results(id))
                 if (r.kind == "circular.attempt") ++first_attempt;
             store.resume_session(id);
+            resumed = id;
         } else {
             test = test_from_options(o);
-            id = create_circular_session(
-                store, test, *dialect, dwell_s,
-                o.device.rfind("emulator:", 0) == 0 ? storage::SessionSource::emulator : storage::SessionSource::device,
-                o.operator_name, "circle measure");
         }
     } catch (const storage::StorageError& e) {
         throw cli_error(e);
@@ -373,18 +415,34 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
         if (dynamic_cast<const CliError*>(&e)) throw;
         throw CliError(kExitUsage, e.what());
     }
-    const std::string program_path =
-        o.program_file.empty() ? "ballbar-session-" + std::to_string(id) + ".nc" : o.program_file;
-    const std::string program = acq::circular_program(test, dialect.value_or(analysis::NcDialect::Fanuc), dwell_s);
-    if (!o.json)
-        std::cout << "Session " << id << ": circular test in " << circ::plane_name(test.plane) << ", radius "
-                  << test.radius_mm << " mm, feed " << test.feed_mm_min << " mm/min, " << test.runs.size()
-                  << " runs.\n";
+    const auto nc_dialect = dialect.value_or(analysis::NcDialect::Fanuc);
+    const std::string program = acq::circular_program(test, nc_dialect, dwell_s);
     const auto mode = o.json ? (o.non_interactive ? CircleOperator::Mode::JsonScripted : CircleOperator::Mode::Json)
                       : o.non_interactive ? CircleOperator::Mode::Scripted
                                           : CircleOperator::Mode::Terminal;
-    CircleOperator op(mode, std::cin, std::cout, globals.color, program_path, program);
-    CircleStoreSink sink(store, id, test.radius_mm);
+    const auto program_path = [&o](std::int64_t id) {
+        return o.program_file.empty() ? "ballbar-session-" + std::to_string(id) + ".nc" : o.program_file;
+    };
+    CircleOperator op(mode, std::cin, std::cout, globals.color, resumed ? program_path(*resumed) : "", program);
+    // The session is made once the instrument is accepted for the test: a refused test leaves none.
+    const auto create = [&] {
+        const std::int64_t id = create_circular_session(
+            store, test, nc_dialect, dwell_s,
+            o.device.rfind("emulator:", 0) == 0 ? storage::SessionSource::emulator : storage::SessionSource::device,
+            o.operator_name, "circle measure");
+        op.set_program_path(program_path(id));
+        if (!o.json)
+            std::cout << "Session " << id << ": circular test in " << circ::plane_name(test.plane) << ", radius "
+                      << test.radius_mm << " mm, feed " << test.feed_mm_min << " mm/min, " << test.runs.size()
+                      << " runs." << std::endl;
+        return id;
+    };
+    std::optional<CircleStoreSink> sink_storage;
+    if (resumed)
+        sink_storage.emplace(store, *resumed, test.radius_mm);
+    else
+        sink_storage.emplace(store, CircleStoreSink::Create(create), test.radius_mm);
+    CircleStoreSink& sink = *sink_storage;
     const std::string uri = o.device;
     DeviceSource source([uri] {
         try {
@@ -393,32 +451,29 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
             throw acq::SourceError(e.what());
         }
     });
-    source.on_identified = [&store, id, &sink](const device::InstrumentInfo& info) {
-        storage::Instrument inst;
-        inst.model = info.model;
-        inst.serial = info.serial;
-        inst.firmware = info.firmware;
-        inst.calibrated_length_mm = info.calibrated_length_mm;
-        inst.calibration_date = info.calibration_date;
-        store.set_instrument(id, inst);
-        sink.set_reference_length(info.calibrated_length_mm);
-    };
+    source.on_identified = [&sink](const device::InstrumentInfo& info) { sink.identified(info); };
     const auto gauge = make_gauge_source(uri, test.radius_mm);  // a digital gauge on the bar (gauge_source.hpp)
     const InterruptGuard interrupt;
     acq::CircularOptions options;
     options.stop = InterruptGuard::flag();
     options.dwell_s = dwell_s;
     options.first_attempt = first_attempt;
-    const std::uint64_t first_seq = store.next_seq(id);
+    const std::uint64_t first_seq = resumed ? store.next_seq(*resumed) : 0;
     acq::CircularSession session(test, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
     const acq::CircularSummary sum = session.run();
     sink.finish(sum);
-    if (gauge) store_gauge_instrument(store, id, *gauge, first_seq);
-    outcome(sum, id, "ballbar circle measure --resume " + std::to_string(id) + " --device " + o.device);
+    if (gauge && sink.id()) store_gauge_instrument(store, *sink.id(), *gauge, first_seq);
+    outcome(
+        sum, sink.id(),
+        "ballbar circle measure --resume " + (sink.id() ? std::to_string(*sink.id()) : "") + " --device " + o.device);
+    const std::int64_t id = *sink.id();
     json j;
     const auto [result, trace] = analyze_stored(store, id, &j);
     if (o.json) {
-        std::cout << json{{"event", "done"}, {"session", id}, {"samples", sum.samples}, {"attempts", sum.attempts},
+        std::cout << json{{"event", "done"},
+                          {"session", id},
+                          {"samples", sum.samples},
+                          {"attempts", sum.attempts},
                           {"result", j}}
                          .dump()
                   << std::endl;
@@ -548,9 +603,9 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     storage::StoreOptions so;
     so.sync_full = false;
     storage::Store store(resolve_db_path(globals), so);
-    const std::int64_t id =
-        create_circular_session(store, test, dialect, dwell_s, storage::SessionSource::emulator, "demo",
-                                "ballbar demo --test circular --plane " + o.plane + " --seed " + std::to_string(o.seed));
+    const std::int64_t id = create_circular_session(
+        store, test, dialect, dwell_s, storage::SessionSource::emulator, "demo",
+        "ballbar demo --test circular --plane " + o.plane + " --seed " + std::to_string(o.seed));
     const bool show = !o.json && ::isatty(STDERR_FILENO);
     if (!o.json)
         std::cout << "ballbar demo --test circular: " << circ::plane_name(test.plane) << ", radius " << test.radius_mm
@@ -561,9 +616,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
                       show ? std::cerr : static_cast<std::ostream&>(discard), false, "", "");
     DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
     CircleStoreSink sink(store, id, test.radius_mm);
-    source.on_identified = [&sink](const device::InstrumentInfo& info) {
-        sink.set_reference_length(info.calibrated_length_mm);
-    };
+    source.on_identified = [&sink](const device::InstrumentInfo& info) { sink.identified(info); };
     acq::CircularOptions options;
     options.dwell_s = dwell_s;
     acq::CircularSession session(test, source, sink, op, options);
@@ -574,7 +627,8 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
 
     json stored;
     const auto [result, trace] = analyze_stored(store, id, &stored);
-    const auto checks = device::compare_with_truth(result, emulator.emulator().continuous()->truth(test.plane, test.radius_mm));
+    const auto checks =
+        device::compare_with_truth(result, emulator.emulator().continuous()->truth(test.plane, test.radius_mm));
     bool pass = true;
     json diags = json::array();
     for (const auto& c : checks) {
@@ -611,16 +665,17 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     if (o.json) {
         std::cout << out.dump() << std::endl;
     } else {
-        std::printf("\nDiagnostics against the emulator's truth (rule of docs/circular.md: 20 %% or 0.25 µm radial;\n"
-                    "pitch and frequency 5 %%; where nothing was injected, below twice that):\n");
+        std::printf(
+            "\nDiagnostics against the emulator's truth (rule of docs/circular.md: 20 %% or 0.25 µm radial;\n"
+            "pitch and frequency 5 %%; where nothing was injected, below twice that):\n");
         std::printf("  %-28s %12s %10s %12s %10s  %s\n", "diagnostic", "measured", "± u", "truth", "allowed", "");
         for (const auto& c : checks) {
-            std::printf("  %-28s %12s %10s %12.3f %10.3f  %s\n", c.key.c_str(),
-                        c.measured ? std::to_string(std::round(*c.measured * 1000) / 1000).substr(0, 10).c_str()
-                                   : c.note.c_str(),
-                        c.measured ? std::to_string(std::round(c.std_uncertainty * 1000) / 1000).substr(0, 8).c_str()
-                                   : "",
-                        c.truth, c.allowed, c.pass ? "ok" : "MISSED");
+            if (c.measured)
+                std::printf("  %-28s %12.3f %10.3f %12.3f %10.3f  %s\n", c.key.c_str(), *c.measured, c.std_uncertainty,
+                            c.truth, c.allowed, c.pass ? "ok" : "MISSED");
+            else
+                std::printf("  %-28s %23s %12.3f %10.3f  %s\n", c.key.c_str(), c.note.c_str(), c.truth, c.allowed,
+                            c.pass ? "ok" : "MISSED");
         }
         for (const auto& r : result.runs)
             std::printf("G %s: %.3f µm\n", circ::direction_name(r.direction), r.circularity_um);

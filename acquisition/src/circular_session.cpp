@@ -168,7 +168,7 @@ bool CircularSession::attempt(int number) {
     std::vector<std::size_t> gaps;          // index of the first sample after each gap
     std::vector<std::size_t> out_of_range;  // samples beyond the transducer's range
     std::optional<circ::FeedIn> fi;
-    std::size_t run = 0, from = 0;
+    std::size_t run = 0, from = 0, trace_first = 0;
     double searched_at = -1e300;
     int silent = 0;
     std::size_t since_progress = 0;
@@ -259,13 +259,33 @@ bool CircularSession::attempt(int number) {
             if (now - searched_at < 0.25) continue;
             searched_at = now;
             const auto f = circ::find_feed_in(test_, samples, from);
-            if (f && now > f->command_end_s + 0.3) fi = f;
+            if (!f || now <= f->command_end_s + 0.3) continue;
+            // A feed-in ends on the circle: the bar stays near the radius after it. A fall that comes back
+            // (a rapid approach that cuts inside the circle) is not one: search on after it.
+            bool on_circle = true;
+            for (std::size_t i = f->index; i < samples.size(); ++i) {
+                const double t = samples[i].time_s;
+                if (t < f->command_end_s + 5.0 * f->lag_s + 0.05) continue;
+                if (t > f->command_end_s + 0.3) break;
+                if (std::abs(samples[i].measured_mm - test_.radius_mm) > 0.25 * test_.feed_in_mm) on_circle = false;
+            }
+            if (on_circle)
+                fi = f;
+            else
+                from = f->index + 1;
             continue;
         }
         const double lag_margin = 5.0 * fi->lag_s + 0.2;
         const double end_s = fi->command_end_s + run_duration_s(run) + feed_in_s + lag_margin;
         if (now < end_s) continue;
         const double start_s = fi->command_end_s - feed_in_s - lag_margin;
+        if (run == 0) {  // the trace starts on the stand before the first feed-in
+            const double stand_s = start_s - 0.5 * options_.dwell_s;
+            trace_first = static_cast<std::size_t>(
+                std::lower_bound(samples.begin(), samples.end(), stand_s,
+                                 [](const circ::TraceSample& s, double t) { return s.time_s < t; }) -
+                samples.begin());
+        }
         const auto first = static_cast<std::size_t>(
             std::lower_bound(samples.begin() + static_cast<std::ptrdiff_t>(from), samples.end(), start_s,
                              [](const circ::TraceSample& s, double t) { return s.time_s < t; }) -
@@ -303,11 +323,12 @@ bool CircularSession::attempt(int number) {
         if (run < test_.runs.size()) continue;
         stream_off();
         a.good = true;
-        a.first_seq = seqs.front();
+        a.first_seq = seqs[trace_first];
         a.last_seq = seqs[last];
         sink_.on_attempt(a);
         summary_.good = a;
-        summary_.trace.assign(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(last + 1));
+        summary_.trace.assign(samples.begin() + static_cast<std::ptrdiff_t>(trace_first),
+                              samples.begin() + static_cast<std::ptrdiff_t>(last + 1));
         return true;
     }
 }
@@ -330,6 +351,7 @@ CircularSummary CircularSession::run() {
         }
         if (status_.battery_pct < 5)
             end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
+        sink_.on_instrument_accepted(status_);
         if (!status_.referenced) reference();
         fire(Event::CheckPassed,
              "bar " + fmt(status_.calibrated_length_mm, 3) + " mm, " + fmt(status_.sample_rate_hz, 0) + " readings/s");

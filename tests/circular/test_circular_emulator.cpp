@@ -65,7 +65,8 @@ std::vector<circ::TraceSample> record(Emulator& emu) {
         inst.poll(10ms);
         const std::size_t n = inst.read_samples(buf);
         for (std::size_t i = 0; i < n; ++i)
-            out.push_back({static_cast<double>(buf[i].device_time_us) * 1e-6, buf[i].length_mm(info.calibrated_length_mm)});
+            out.push_back(
+                {static_cast<double>(buf[i].device_time_us) * 1e-6, buf[i].length_mm(info.calibrated_length_mm)});
     }
     inst.stop_streaming();
     return out;
@@ -164,8 +165,8 @@ TEST(ContinuousMachine, FollowsTheCommandThroughItsLagAndStandsAtTheSocketRadius
     const auto c = m.commanded_mm(on_circle);
     const auto a = m.actual_mm(on_circle);
     EXPECT_NEAR(std::hypot(c[0] - a[0], c[1] - a[1]), 2000.0 / 60.0 * 0.010, 0.01);
-    EXPECT_NEAR(m.program_end_s(), 2.0 + 2 * (1.0 + 2 * 0.8 / (2000.0 / 60.0) + 450 * M_PI / 180 * 100 / (2000.0 / 60.0)) + 1.0,
-                0.01);
+    EXPECT_NEAR(m.program_end_s(),
+                2.0 + 2 * (1.0 + 2 * 0.8 / (2000.0 / 60.0) + 450 * M_PI / 180 * 100 / (2000.0 / 60.0)) + 1.0, 0.01);
 }
 
 TEST(ContinuousEmulator, BacklashOfXIsRecoveredWithItsSign) {
@@ -224,7 +225,7 @@ TEST(ContinuousEmulator, YzPartialArcRecoversBacklashOfZAndSquareness) {
 }
 TEST(ContinuousEmulator, ZxPartialArcRecoversScaleMismatchAndSpikeOfX) {
     ContinuousErrors e = lagged();
-    e.axis[2].scale_ppm = -25.0;  // p = Z
+    e.axis[2].scale_ppm = -25.0;        // p = Z
     e.axis[0].reversal_spike_um = 2.0;  // q = X
     const auto o = measure(test_spec(circ::Plane::ZX, false), e);
     expect_recovered(o, circ::Diag::ScaleMismatch, -25.0);

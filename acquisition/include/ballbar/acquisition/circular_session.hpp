@@ -52,6 +52,9 @@ class CircularSink {
     virtual void on_samples(std::span<const analysis::BarSample> samples) = 0;
     /// An attempt ended (good or not).
     virtual void on_attempt(const CircularAttempt& a) = 0;
+    /// The instrument can measure this test (its check passed): before anything is asked of the operator.
+    /// A sink may create its session here, so that a refused test leaves none.
+    virtual void on_instrument_accepted(const InstrumentStatus&) {}
 };
 
 struct CircularOptions {
