@@ -58,7 +58,7 @@ bool ends_with(std::string_view s, std::string_view suffix) {
 void name_and_unit(CircularDiagnostic& d) {
     std::string k = d.key;
     static const std::pair<const char*, const char*> units[] = {{"_um_per_m", "µm/m"}, {"_ppm", "ppm"}, {"_ms", "ms"},
-                                                                {"_um", "µm"},        {"_mm", "mm"},    {"_hz", "Hz"}};
+                                                                {"_um", "µm"},         {"_mm", "mm"},   {"_hz", "Hz"}};
     for (const auto& [suffix, unit] : units) {
         if (ends_with(k, suffix)) {
             d.unit = unit;
@@ -199,7 +199,8 @@ void add_circular(Report& report, std::string_view, const json& p) {
         c.samples_used = opt_num(*cond, "samples_used", "conditions.");
         c.bar_temp_C = range_of(find(*cond, "bar_temp_C"));
         c.air_temp_C = range_of(find(*cond, "air_temp_C"));
-        if (const json* ins = find(*cond, "instrument")) c.instrument = ins->is_string() ? ins->get<std::string>() : ins->dump();
+        if (const json* ins = find(*cond, "instrument"))
+            c.instrument = ins->is_string() ? ins->get<std::string>() : ins->dump();
     }
     if (const json* tol = find(p, "tolerance")) {
         c.tolerance_um = opt_num(*tol, "circularity_um", "tolerance.");

@@ -102,12 +102,17 @@ void figures(Document& doc, const CircularTest& c) {
                         judged(*c.bidirectional_um), "one least-squares centre for both runs"});
     rows.push_back({"F max (radial deviation)", fixed(c.radial_max_um, 2), "", "", "measured − programmed radius"});
     rows.push_back({"F min (radial deviation)", fixed(c.radial_min_um, 2), "", "", "over every data arc"});
-    rows.push_back({"residual RMS after the diagnosis", fixed(c.residual_rms_um, 3), "", "", "what no diagnostic explains"});
+    rows.push_back(
+        {"residual RMS after the diagnosis", fixed(c.residual_rms_um, 3), "", "", "what no diagnostic explains"});
     if (c.mean_radius_um)
-        rows.push_back({"mean radius − programmed radius", plus_minus(*c.mean_radius_um, c.mean_radius_uncertainty_um, 2),
-                        "", "", "absolute only with a calibrated bar"});
-    doc.table({{"figure", 2.2}, {"value (µm)", 1.1, HAlign::Right}, {"tolerance (µm)", 1.1, HAlign::Right},
-               {"result", 0.7, HAlign::Center}, {"", 2.6}},
+        rows.push_back({"mean radius − programmed radius",
+                        plus_minus(*c.mean_radius_um, c.mean_radius_uncertainty_um, 2), "", "",
+                        "absolute only with a calibrated bar"});
+    doc.table({{"figure", 2.2},
+               {"value (µm)", 1.1, HAlign::Right},
+               {"tolerance (µm)", 1.1, HAlign::Right},
+               {"result", 0.7, HAlign::Center},
+               {"", 2.6}},
               rows);
     if (tol) {
         const bool pass = c.pass();
@@ -121,9 +126,10 @@ void figures(Document& doc, const CircularTest& c) {
                           "the same value.",
                       7, kGrey);
     } else {
-        doc.paragraph("No tolerance: give one with `ballbar report SESSION --tolerance UM` (or store one with "
-                      "`circle analyze --tolerance UM --store`) for a pass/fail verdict.",
-                      7, kGrey);
+        doc.paragraph(
+            "No tolerance: give one with `ballbar report SESSION --tolerance UM` (or store one with "
+            "`circle analyze --tolerance UM --store`) for a pass/fail verdict.",
+            7, kGrey);
     }
 }
 
@@ -233,8 +239,8 @@ void polar_plot(Document& doc, const CircularTest& c) {
         cairo_stroke(cr);
         set_color(cr, kBlack);
         draw_text(cr, lx + 20, y + 4,
-                  "run " + std::to_string(k + 1) + " " + run.direction + ": G " + um(run.circularity_um),
-                  HAlign::Left, VAlign::Middle);
+                  "run " + std::to_string(k + 1) + " " + run.direction + ": G " + um(run.circularity_um), HAlign::Left,
+                  VAlign::Middle);
         y += 12;
     }
     if (c.tolerance_um) {
@@ -242,15 +248,21 @@ void polar_plot(Document& doc, const CircularTest& c) {
         cairo_rectangle(cr, lx, y, 16, 8);
         cairo_fill(cr);
         set_color(cr, kBlack);
-        draw_text(cr, lx + 20, y + 4, "tolerance band " + um(*c.tolerance_um) + " wide", HAlign::Left,
-                  VAlign::Middle);
+        draw_text(cr, lx + 20, y + 4, "tolerance band " + um(*c.tolerance_um) + " wide", HAlign::Left, VAlign::Middle);
         y += 12;
     }
     y += 6;
     const double magnification = gain / (rho0 / (c.radius_mm * 1000.0));  // deviation vs the drawn radius
     const std::vector<std::string> notes{
-        "Radial scale: " + tick_label(0.5 * d, d < 2 ? 2 : d < 20 ? 1 : 0) + " µm between rings (dashed), " +
-            tick_label(d, d < 2 ? 2 : d < 20 ? 1 : 0) + " µm at the outer ring.",
+        "Radial scale: " +
+            tick_label(0.5 * d, d < 2    ? 2
+                                : d < 20 ? 1
+                                         : 0) +
+            " µm between rings (dashed), " +
+            tick_label(d, d < 2    ? 2
+                          : d < 20 ? 1
+                                   : 0) +
+            " µm at the outer ring.",
         "Deviation magnified " + fixed(magnification, 0) + " × against the " + fixed(c.radius_mm, 0) +
             " mm radius (drawn as the solid grey circle).",
         "Reference: one least-squares circle for all runs (its centre and radius removed, as for G(b)); outwards "

@@ -51,8 +51,8 @@ struct Imported {
     std::string id;
     Imported() {
         db = testing::quoted(dir.path / "c.db");
-        const auto imp = nlohmann::json::parse(run_capture(exe + " --db " + db + " import " +
-                                                           testing::quoted(write_trace(dir)) + " --json 2>/dev/null"));
+        const auto imp = nlohmann::json::parse(
+            run_capture(exe + " --db " + db + " import " + testing::quoted(write_trace(dir)) + " --json 2>/dev/null"));
         id = std::to_string(imp["session"].get<int>());
     }
     std::string cmd(const std::string& args) const { return exe + " --db " + db + " " + args; }
@@ -108,7 +108,8 @@ TEST(CliReportCircular, ImportedTraceReportHoldsTheAnalysisAndTheVerdict) {
     // over both runs is G(b) (min and max survive the per-column reduction).
     double lo = 1e9, hi = -1e9;
     for (const auto& run : c["runs"])
-        for (const auto& v : run["polar"]["deviation_um"]) lo = std::min(lo, v.get<double>()), hi = std::max(hi, v.get<double>());
+        for (const auto& v : run["polar"]["deviation_um"])
+            lo = std::min(lo, v.get<double>()), hi = std::max(hi, v.get<double>());
     EXPECT_NEAR(hi - lo, gb, 0.05);
     EXPECT_GE(c["polar_plot"]["deviation_um_at_outer_ring"].get<double>(), std::max(hi, -lo));
     // Test conditions.
@@ -121,8 +122,8 @@ TEST(CliReportCircular, StoredToleranceAndFailingVerdict) {
     Imported s;
     ASSERT_EQ(run(s.cmd("circle analyze " + s.id + " --tolerance 0.5 >/dev/null 2>&1")), 1);  // stored, fails
     const auto pdf = s.dir.path / "r.pdf";
-    const auto j =
-        nlohmann::json::parse(run_capture(s.cmd("report " + s.id + " --out " + testing::quoted(pdf) + " --json 2>/dev/null")));
+    const auto j = nlohmann::json::parse(
+        run_capture(s.cmd("report " + s.id + " --out " + testing::quoted(pdf) + " --json 2>/dev/null")));
     const auto& c = j["circular"];
     EXPECT_EQ(c["tolerance"]["circularity_um"], 0.5);
     EXPECT_EQ(c["tolerance"]["source"], "stored with the result");
@@ -147,8 +148,7 @@ TEST(CliReportCircular, WithoutAStoredResultTheReportAnalyses) {
     EXPECT_TRUE(shown["results"].empty()) << shown["results"].dump();
     // The same figures as circle analyze of the file gives.
     const auto analysis = nlohmann::json::parse(run_capture(s.cmd("circle analyze " + s.id + " --json")));
-    EXPECT_DOUBLE_EQ(c["runs"][0]["circularity_um"].get<double>(),
-                     analysis["runs"][0]["circularity_um"].get<double>());
+    EXPECT_DOUBLE_EQ(c["runs"][0]["circularity_um"].get<double>(), analysis["runs"][0]["circularity_um"].get<double>());
 }
 
 }  // namespace
