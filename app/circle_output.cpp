@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "ballbar/storage/circular_result.hpp"
+
 namespace ballbar::app {
 namespace {
 
@@ -45,71 +47,7 @@ std::array<AxisFigures, 2> axis_figures(const circ::CircularResult& r) {
 
 json circle_result_json(const circ::CircularResult& r, const storage::TraceFile& trace,
                         std::optional<double> tolerance_um) {
-    json j;
-    j["test"] = json::parse(storage::test_json(r.test));
-    json runs = json::array();
-    for (const auto& run : r.runs)
-        runs.push_back({{"direction", circ::direction_name(run.direction)},
-                        {"circularity_um", run.circularity_um},
-                        {"radial_deviation_um", {{"max", run.radial_max_um}, {"min", run.radial_min_um}}},
-                        {"feed_in_end_s", run.feed_in_end_s},
-                        {"feed_in_lag_ms", run.servo_lag_s * 1e3},
-                        {"data_start_s", run.data_start_s},
-                        {"data_end_s", run.data_end_s},
-                        {"samples", run.last_sample - run.first_sample}});
-    j["runs"] = runs;
-    j["bidirectional_circularity_um"] = r.bidirectional_um ? json(*r.bidirectional_um) : json(nullptr);
-    j["radial_deviation_um"] = {{"max", r.radial_max_um}, {"min", r.radial_min_um}};
-    json diags = json::object(), unc = json::object(), share = json::object(), ranking = json::array(),
-         missing = json::array();
-    for (const auto& d : r.diagnostics) {
-        if (!d.detected) {
-            missing.push_back(d.key);
-            continue;
-        }
-        diags[d.key] = d.value;
-        unc[d.key] = d.std_uncertainty;
-        if (d.contribution_um > 0.0) {
-            share[d.key] = d.share_percent;
-            ranking.push_back(d.key);
-        }
-    }
-    j["diagnostics"] = diags;
-    j["uncertainties"] = unc;
-    j["shares_percent"] = share;
-    j["ranking"] = ranking;
-    j["not_detected"] = missing;
-    json groups = json::array();
-    for (const auto& g : r.unseparable) {
-        json e = {{"keys", g.keys}, {"reason", g.reason}};
-        if (!g.combined_key.empty())
-            e["combined"] = {{"as", g.combined_key}, {"value", g.combined_value}, {"std_uncertainty", g.combined_std}};
-        groups.push_back(e);
-    }
-    j["unseparable"] = groups;
-    j["residual_rms_um"] = r.residual_rms_um;
-    j["mean_radius_um"] = {{"value", r.mean_radius_um}, {"std_uncertainty", r.mean_radius_std_um}};
-    json cond = {{"plane", circ::plane_name(r.test.plane)},
-                 {"radius_mm", r.test.radius_mm},
-                 {"feed_mm_min", r.test.feed_mm_min},
-                 {"sample_rate_hz", r.sample_rate_hz},
-                 {"samples_used", r.samples_used}};
-    auto range = [](const std::vector<std::optional<double>>& v) -> json {
-        double lo = 1e300, hi = -1e300;
-        for (const auto& x : v)
-            if (x) lo = std::min(lo, *x), hi = std::max(hi, *x);
-        return lo <= hi ? json{{"min", lo}, {"max", hi}} : json(nullptr);
-    };
-    cond["bar_temp_C"] = range(trace.bar_temp_C);
-    cond["air_temp_C"] = range(trace.air_temp_C);
-    cond["instrument"] = trace.instrument_json.empty() ? json(nullptr) : json::parse(trace.instrument_json);
-    j["conditions"] = cond;
-    if (tolerance_um) {
-        bool pass = true;
-        for (const auto& run : r.runs) pass = pass && run.circularity_um <= *tolerance_um;
-        j["tolerance"] = {{"circularity_um", *tolerance_um}, {"pass", pass}};
-    }
-    return j;
+    return json::parse(storage::circular_result_json(r, trace, tolerance_um));  // the stored payload's format
 }
 
 void print_circle_result(std::ostream& os, const circ::CircularResult& r, const storage::TraceFile& trace,
@@ -178,37 +116,47 @@ void print_volumetric(std::ostream& os, const circ::VolumetricResult& v) {
 json controller_json(const circ::CircularResult& r, const std::string& controller) {
     json j = {{"controller", controller}};
     json axes = json::object();
-    const char* grbl_backlash[3] = {"$160", "$161", "$162"};
-    const char* grbl_steps[3] = {"$100", "$101", "$102"};
+    // grblHAL: axis settings are numbered 100 + 10·kind + axis (X 0, Y 1, Z 2); kind 0 steps/mm,
+    // kind 6 backlash (mm, only in a build with ENABLE_BACKLASH_COMPENSATION).
+    const char* smoothie_actuator[3] = {"alpha", "beta", "gamma"};
     for (const auto& a : axis_figures(r)) {
         json e = json::object();
         const std::string axis(1, static_cast<char>(a.axis - 'a' + 'A'));
+        const std::string index = std::to_string(a.index);
         if (a.backlash_um) {
             const double mm = std::max(*a.backlash_um, 0.0) * 1e-3;
             e["backlash_mm"] = mm;
             if (*a.backlash_um < 0.0) e["note"] = "negative lost motion (the axis overshoots): not compensable, set 0";
-            if (controller == "linuxcnc")
-                e["setting"] = "[JOINT_" + std::to_string(a.index) + "] BACKLASH = " + fmt(mm, 4);
-            else if (controller == "grblhal")
-                e["setting"] = std::string(grbl_backlash[a.index]) + "=" + fmt(mm, 4);
-            else
-                e["setting"] = "M425 " + axis + fmt(mm, 4);
+            if (controller == "linuxcnc") {
+                e["setting"] = "[JOINT_" + index + "] BACKLASH = " + fmt(mm, 4);
+            } else if (controller == "grblhal") {
+                e["setting"] = "$16" + index + "=" + fmt(mm, 3);
+            } else if (controller == "smoothieware") {
+                e["setting"] = "M425 " + axis + fmt(mm, 4) + " P1";
+                e["config"] = "[actuator] " + std::string(smoothie_actuator[a.index]) + ".backlash_mm = " + fmt(mm, 4);
+            } else {
+                e["setting"] = "M425 " + axis + fmt(mm, 4) + " F1";  // F1: full correction (Marlin's default is 0)
+            }
         }
         if (a.scale_ppm) {
             const double factor = 1.0 / (1.0 + *a.scale_ppm * 1e-6);
             e["scale_ppm"] = *a.scale_ppm;
             e["steps_per_mm_factor"] = factor;
             if (controller == "linuxcnc")
-                e["scale_setting"] =
-                    "[JOINT_" + std::to_string(a.index) + "] SCALE = current SCALE × " + fmt(factor, 7);
+                e["scale_setting"] = "[JOINT_" + index + "] SCALE = current SCALE × " + fmt(factor, 7);
             else if (controller == "grblhal")
-                e["scale_setting"] = std::string(grbl_steps[a.index]) + " = current × " + fmt(factor, 7);
+                e["scale_setting"] = "$10" + index + " = current × " + fmt(factor, 7);
+            else if (controller == "smoothieware")
+                e["scale_setting"] = "[actuator] " + std::string(smoothie_actuator[a.index]) +
+                                     ".steps_per_mm = current × " + fmt(factor, 7);
             else
                 e["scale_setting"] = "M92 " + axis + "<current steps/mm × " + fmt(factor, 7) + ">";
         }
         axes[axis] = e;
     }
     j["axes"] = axes;
+    if (controller == "smoothieware")
+        j["config"] = "[motion control] backlash_enable = true";  // SmoothieV2: on at every boot
     return j;
 }
 
@@ -222,7 +170,19 @@ void print_controller(std::ostream& os, const circ::CircularResult& r, const std
             os << "  " << e["scale_setting"].get<std::string>() << "   ; " << axis << " scale error "
                << fmt(e["scale_ppm"].get<double>(), 1) << " ppm\n";
     }
-    if (controller == "marlin" || controller == "smoothieware") os << "  M500   ; keep them (Marlin: EEPROM)\n";
+    if (controller == "linuxcnc")
+        os << "  ; machine units: mm (an inch machine: / 25.4); joints 0, 1, 2 = X, Y, Z (trivkins); with BACKLASH,\n"
+              "  ; give the step generator headroom (STEPGEN_MAXACCEL about twice MAX_ACCELERATION)\n";
+    if (controller == "marlin") os << "  M500   ; keep them (EEPROM); Marlin built with BACKLASH_GCODE\n";
+    if (controller == "grblhal")
+        os << "  ; grblHAL built with ENABLE_BACKLASH_COMPENSATION; it starts from the homing direction ($23)\n";
+    if (controller == "smoothieware") {
+        os << "  ; SmoothieV2 (version 1 has no backlash compensation): M425 sets it until power-off; to keep it,\n"
+              "  ; config.ini:\n";
+        for (const auto& [axis, e] : j["axes"].items())
+            if (e.contains("config")) os << "  ;   " << e["config"].get<std::string>() << '\n';
+        os << "  ;   " << j["config"].get<std::string>() << '\n';
+    }
 }
 
 }  // namespace ballbar::app

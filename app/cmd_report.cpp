@@ -3,8 +3,10 @@
 // PDF on A4 pages and/or, with --json, the same content as JSON on standard output.
 #if __has_include("ballbar/report/build.hpp") && defined(BALLBAR_REPORT_HAS_STORAGE)
 
+#include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "ballbar/report/build.hpp"
@@ -22,6 +24,7 @@ struct ReportOptions {
     std::string session;
     std::string out;
     bool json = false;
+    std::optional<double> tolerance_um;  // circular sessions: the G tolerance
 };
 
 int run_report(const ReportOptions& o, const Globals& globals) {
@@ -44,12 +47,15 @@ int run_report(const ReportOptions& o, const Globals& globals) {
     }
     report::BuildOptions bo;
     bo.software_version = kVersion;
+    if (o.tolerance_um && !(*o.tolerance_um > 0.0 && std::isfinite(*o.tolerance_um)))
+        throw CliError(kExitUsage, "--tolerance must be a circular deviation > 0, µm");
     report::Report r;
     try {
         r = report::build_report(*store, id, bo);
     } catch (const report::ReportError& e) {
         throw CliError(kExitFailure, "session " + std::to_string(id) + ": " + e.what());
     }
+    if (o.tolerance_um) report::set_circular_tolerance(r, *o.tolerance_um);
     if (!o.out.empty()) {
         try {
             const int pages = report::render_pdf(r, o.out);
@@ -73,6 +79,8 @@ BALLBAR_COMMAND(report) {
     sub->add_option("session", opts->session, "Session id or uuid prefix")->required();
     sub->add_option("--out,-o", opts->out, "Write the PDF report to this file");
     sub->add_flag("--json", opts->json, "Print the report's content as JSON (schema ballbar-report/1)");
+    sub->add_option("--tolerance", opts->tolerance_um,
+                    "circular test: G allowed, µm, for the pass/fail verdict (default: the stored result's)");
     sub->callback([opts, &globals] { globals.action = [opts, &globals] { return run_report(*opts, globals); }; });
 }
 

@@ -17,23 +17,26 @@ std::string run_name(std::size_t i, const RunSpec& r) {
     return "run " + std::to_string(i + 1) + " (" + direction_name(r.direction) + ")";
 }
 
-/// Max − min radial deviation about the least-squares centre of the given points.
-double circular_deviation(const std::vector<const detail::FitPoint*>& pts, double lag_phase) {
-    if (pts.size() < 3) return 0.0;
+/// A data point at the axes' angle: its radial deviation and the cosine and sine of the angle.
+struct AnglePoint {
+    double y_um, c, s;
+};
+
+/// Max − min radial deviation about the least-squares centre of the points [begin, end).
+double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
+    if (end - begin < 3) return 0.0;
     Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
-    for (const auto* p : pts) {
-        const double th = p->theta - p->dir * lag_phase;
-        const Eigen::Vector3d row(1.0, std::cos(th), std::sin(th));
+    for (const AnglePoint* p = begin; p != end; ++p) {
+        const Eigen::Vector3d row(1.0, p->c, p->s);
         a += row * row.transpose();
         b += row * p->y_um;
     }
     const Eigen::Vector3d c = a.ldlt().solve(b);
     double lo = 0.0, hi = 0.0;
     bool first = true;
-    for (const auto* p : pts) {
-        const double th = p->theta - p->dir * lag_phase;
-        const double e = p->y_um - (c[0] + c[1] * std::cos(th) + c[2] * std::sin(th));
+    for (const AnglePoint* p = begin; p != end; ++p) {
+        const double e = p->y_um - (c[0] + c[1] * p->c + c[2] * p->s);
         lo = first ? e : std::min(lo, e), hi = first ? e : std::max(hi, e);
         first = false;
     }
@@ -133,15 +136,22 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
     }
     detail::FitOutput fit = detail::fit_diagnostics(fit_in, options);
     const double lag_phase = std::atan(omega * fit.lag_mean_s);
-    std::vector<const detail::FitPoint*> all;
+    // The points run by run (in.points holds them in run order), each angle's cosine and sine once.
+    std::vector<AnglePoint> all;
+    all.reserve(in.points.size());
+    std::vector<std::size_t> run_begin(result.runs.size() + 1, 0);
     for (std::size_t k = 0; k < result.runs.size(); ++k) {
-        std::vector<const detail::FitPoint*> pts;
-        for (const auto& p : in.points)
-            if (p.run == static_cast<int>(k)) pts.push_back(&p);
-        result.runs[k].circularity_um = circular_deviation(pts, lag_phase);
-        all.insert(all.end(), pts.begin(), pts.end());
+        run_begin[k] = all.size();
+        for (const auto& p : in.points) {
+            if (p.run != static_cast<int>(k)) continue;
+            const double th = p.theta - p.dir * lag_phase;
+            all.push_back({p.y_um, std::cos(th), std::sin(th)});
+        }
     }
-    if (in.both_directions) result.bidirectional_um = circular_deviation(all, lag_phase);
+    run_begin[result.runs.size()] = all.size();
+    for (std::size_t k = 0; k < result.runs.size(); ++k)
+        result.runs[k].circularity_um = circular_deviation(all.data() + run_begin[k], all.data() + run_begin[k + 1]);
+    if (in.both_directions) result.bidirectional_um = circular_deviation(all.data(), all.data() + all.size());
     result.radial_max_um = result.runs.front().radial_max_um;
     result.radial_min_um = result.runs.front().radial_min_um;
     for (const auto& r : result.runs) {

@@ -84,8 +84,11 @@ struct State {
 
 struct Design {
     std::vector<int> ids;
-    Eigen::MatrixXd x;
+    Eigen::MatrixXd buffer;  ///< rows × the most columns a design has: allocated once, reused by every build
+    Eigen::Index used = 0;   ///< columns in use
     Eigen::VectorXd y;
+    auto x() { return buffer.leftCols(used); }
+    auto x() const { return buffer.leftCols(used); }
     int col(int id) const {
         const auto it = std::find(ids.begin(), ids.end(), id);
         return it == ids.end() ? -1 : static_cast<int>(it - ids.begin());
@@ -147,7 +150,9 @@ class Model {
     void build(const State& st, const std::vector<int>& ids, Design& d) const {
         const auto n = static_cast<Eigen::Index>(in_.points.size());
         d.ids = ids;
-        d.x.resize(n, static_cast<Eigen::Index>(ids.size()));
+        const auto m = static_cast<Eigen::Index>(ids.size());
+        if (d.buffer.rows() != n || d.buffer.cols() < m) d.buffer.resize(n, std::max<Eigen::Index>(m, kDf + 1));
+        d.used = m;
         d.y.resize(n);
         const bool servo = std::find(ids.begin(), ids.end(), kServo) != ids.end();
         const double tp = std::max(st.tau_mean_s + 0.5e-3 * st.dtau_ms, 0.0);
@@ -159,6 +164,11 @@ class Model {
         const double phm = std::atan(w_ * st.tau_mean_s);
         const double cm = std::cos(phm), sm = std::sin(phm);
         const double php = std::atan(w_ * tp), phq = std::atan(w_ * tq);
+        auto has = [&](int id) { return std::find(ids.begin(), ids.end(), id) != ids.end(); };
+        // The periodic terms' sine and cosine once per point for all their columns (values, derivatives).
+        const bool cyc_p = has(kCycPs) || has(kCycPc) || has(kDkP);
+        const bool cyc_q = has(kCycQs) || has(kCycQc) || has(kDkQ);
+        const bool vib = has(kVibS) || has(kVibC) || has(kDf);
         for (Eigen::Index i = 0; i < n; ++i) {
             const FitPoint& pt = in_.points[static_cast<std::size_t>(i)];
             const double c0 = cos_[static_cast<std::size_t>(i)], s0 = sin_[static_cast<std::size_t>(i)];
@@ -176,6 +186,19 @@ class Model {
             const double xp = r_ * cpx, xq = r_ * sqx;
             const double tc = pt.t - t_mid_;
             const double start = pt.theta - pt.dir * pt.travelled;
+            double sin_p = 0.0, cos_p = 0.0, sin_q = 0.0, cos_q = 0.0, sin_v = 0.0, cos_v = 0.0;
+            if (cyc_p) {
+                const double a = 2.0 * kPi * st.kp * xp;
+                sin_p = std::sin(a), cos_p = std::cos(a);
+            }
+            if (cyc_q) {
+                const double a = 2.0 * kPi * st.kq * xq;
+                sin_q = std::sin(a), cos_q = std::cos(a);
+            }
+            if (vib) {
+                const double a = 2.0 * kPi * st.f_hz * tc;
+                sin_v = std::sin(a), cos_v = std::cos(a);
+            }
             for (std::size_t c = 0; c < ids.size(); ++c) {
                 double v = 0.0;
                 switch (ids[c]) {
@@ -216,42 +239,36 @@ class Model {
                         v = sa * sa * ca;
                         break;
                     case kCycPs:
-                        v = std::sin(2.0 * kPi * st.kp * xp) * ca;
+                        v = sin_p * ca;
                         break;
                     case kCycPc:
-                        v = std::cos(2.0 * kPi * st.kp * xp) * ca;
+                        v = cos_p * ca;
                         break;
                     case kCycQs:
-                        v = std::sin(2.0 * kPi * st.kq * xq) * sa;
+                        v = sin_q * sa;
                         break;
                     case kCycQc:
-                        v = std::cos(2.0 * kPi * st.kq * xq) * sa;
+                        v = cos_q * sa;
                         break;
                     case kVibS:
-                        v = std::sin(2.0 * kPi * st.f_hz * tc);
+                        v = sin_v;
                         break;
                     case kVibC:
-                        v = std::cos(2.0 * kPi * st.f_hz * tc);
+                        v = cos_v;
                         break;
-                    case kDkP: {
-                        const double a = 2.0 * kPi * st.kp * xp;
-                        v = 2.0 * kPi * xp * (st.ap_s * std::cos(a) - st.ap_c * std::sin(a)) * ca;
+                    case kDkP:
+                        v = 2.0 * kPi * xp * (st.ap_s * cos_p - st.ap_c * sin_p) * ca;
                         break;
-                    }
-                    case kDkQ: {
-                        const double a = 2.0 * kPi * st.kq * xq;
-                        v = 2.0 * kPi * xq * (st.aq_s * std::cos(a) - st.aq_c * std::sin(a)) * sa;
+                    case kDkQ:
+                        v = 2.0 * kPi * xq * (st.aq_s * cos_q - st.aq_c * sin_q) * sa;
                         break;
-                    }
-                    case kDf: {
-                        const double a = 2.0 * kPi * st.f_hz * tc;
-                        v = 2.0 * kPi * tc * (st.av_s * std::cos(a) - st.av_c * std::sin(a));
+                    case kDf:
+                        v = 2.0 * kPi * tc * (st.av_s * cos_v - st.av_c * sin_v);
                         break;
-                    }
                     default:
                         break;
                 }
-                d.x(i, static_cast<Eigen::Index>(c)) = v;
+                d.buffer(i, static_cast<Eigen::Index>(c)) = v;
             }
         }
     }
@@ -276,16 +293,16 @@ class Model {
 
 Solution solve(const Design& d) {
     Solution s;
-    const Eigen::Index m = d.x.cols(), n = d.x.rows();
+    const Eigen::Index m = d.x().cols(), n = d.x().rows();
     Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m, m);
-    a.selfadjointView<Eigen::Lower>().rankUpdate(d.x.transpose());
+    a.selfadjointView<Eigen::Lower>().rankUpdate(d.x().transpose());
     a = a.selfadjointView<Eigen::Lower>();
     Eigen::VectorXd scale = a.diagonal().cwiseSqrt().cwiseMax(1e-300).cwiseInverse();
     const Eigen::MatrixXd as = scale.asDiagonal() * a * scale.asDiagonal();
-    const Eigen::VectorXd b = scale.asDiagonal() * (d.x.transpose() * d.y);
+    const Eigen::VectorXd b = scale.asDiagonal() * (d.x().transpose() * d.y);
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(as);
     s.beta = scale.asDiagonal() * ldlt.solve(b);
-    s.residual = d.y - d.x * s.beta;
+    s.residual = d.y - d.x() * s.beta;
     const double rss = s.residual.squaredNorm();
     s.rms = std::sqrt(rss / static_cast<double>(std::max<Eigen::Index>(n, 1)));
     const double var = rss / static_cast<double>(std::max<Eigen::Index>(n - m, 1));
@@ -310,15 +327,15 @@ struct Separability {
 /// unseparable, grouped with those it combines.
 Separability check_separability(const Design& d, const FitInput& in, const AnalysisOptions& opt) {
     Separability out;
-    const Eigen::Index m = d.x.cols();
-    Eigen::MatrixXd g = d.x.transpose() * d.x;
+    const Eigen::Index m = d.x().cols();
+    Eigen::MatrixXd g = d.x().transpose() * d.x();
     const Eigen::VectorXd nrm = g.diagonal().cwiseSqrt().cwiseMax(1e-300);
     for (Eigen::Index i = 0; i < m; ++i)
         for (Eigen::Index j = 0; j < m; ++j) g(i, j) /= nrm[i] * nrm[j];
     std::vector<Eigen::Index> acc;
     for (Eigen::Index j = 0; j < m; ++j) {
         const int id = d.ids[static_cast<std::size_t>(j)];
-        if (nrm[j] < 1e-9 * std::sqrt(static_cast<double>(d.x.rows()))) {
+        if (nrm[j] < 1e-9 * std::sqrt(static_cast<double>(d.x().rows()))) {
             UnseparableGroup none;
             none.keys = {col_name(id, in.test.plane)};
             none.reason = "no signature in this data";
@@ -407,18 +424,21 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
         return bs * sys + bc * syc;
     };
     const double dk = 1.0 / (8.0 * r);
-    std::vector<std::complex<double>> z(m), step(m);
+    // A rotating phasor per point (real and imaginary parts apart: plain multiplications, no complex
+    // library calls), advanced by one grid step each pass.
+    std::vector<double> zr(m), zi(m), sr(m), si(m);
     for (std::size_t i = 0; i < m; ++i) {
-        z[i] = std::polar(1.0, 2.0 * kPi * kmin * x[i]);
-        step[i] = std::polar(1.0, 2.0 * kPi * dk * x[i]);
+        zr[i] = std::cos(2.0 * kPi * kmin * x[i]), zi[i] = std::sin(2.0 * kPi * kmin * x[i]);
+        sr[i] = std::cos(2.0 * kPi * dk * x[i]), si[i] = std::sin(2.0 * kPi * dk * x[i]);
     }
     double best = -1.0, best_k = kmin;
     for (double k = kmin; k <= kmax; k += dk) {
         double sss = 0, ssc = 0, scc = 0, sys = 0, syc = 0;
         for (std::size_t i = 0; i < m; ++i) {
-            const double s = z[i].imag() * w[i], c = z[i].real() * w[i];
+            const double s = zi[i] * w[i], c = zr[i] * w[i];
             sss += s * s, ssc += s * c, scc += c * c, sys += y[i] * s, syc += y[i] * c;
-            z[i] *= step[i];
+            const double re = zr[i] * sr[i] - zi[i] * si[i], im = zr[i] * si[i] + zi[i] * sr[i];
+            zr[i] = re, zi[i] = im;
         }
         const double det = sss * scc - ssc * ssc;
         if (det <= 0.0) continue;
@@ -585,11 +605,13 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
     out.lag_mean_s = st.tau_mean_s;
 
     auto contribution = [&](std::initializer_list<int> cols) {
+        std::vector<int> at;  // the design's columns of these terms, looked up once
+        for (int c : cols)
+            if (d.col(c) >= 0) at.push_back(d.col(c));
         double lo = 0.0, hi = 0.0;
-        for (Eigen::Index i = 0; i < d.x.rows(); ++i) {
+        for (Eigen::Index i = 0; i < d.x().rows(); ++i) {
             double v = 0.0;
-            for (int c : cols)
-                if (d.col(c) >= 0) v += d.x(i, d.col(c)) * sol.beta[d.col(c)];
+            for (int c : at) v += d.x()(i, c) * sol.beta[c];
             lo = i == 0 ? v : std::min(lo, v), hi = i == 0 ? v : std::max(hi, v);
         }
         return hi - lo;

@@ -60,6 +60,75 @@ json header(const Header& h) {
             {"notes", h.notes}};
 }
 
+json circular(const Report& r) {
+    if (!r.circular) return nullptr;
+    const CircularTest& c = *r.circular;
+    json runs = json::array();
+    for (const auto& run : c.runs) {
+        json j{{"direction", run.direction},
+               {"start_deg", num(run.start_deg)},
+               {"overshoot_deg", num(run.overshoot_deg)},
+               {"data_arc_deg", num(run.data_arc_deg)},
+               {"circularity_um", num(run.circularity_um)},
+               {"radial_deviation_um", {{"max", num(run.radial_max_um)}, {"min", num(run.radial_min_um)}}},
+               {"feed_in_end_s", opt(run.feed_in_end_s)},
+               {"feed_in_lag_ms", opt(run.feed_in_lag_ms)},
+               {"data_start_s", opt(run.data_start_s)},
+               {"data_end_s", opt(run.data_end_s)},
+               {"samples", opt(run.samples)},
+               {"polar", {{"angle_deg", nums(run.angle_deg)}, {"deviation_um", nums(run.deviation_um)}}}};
+        if (c.tolerance_um) j["pass"] = run.circularity_um <= *c.tolerance_um;
+        runs.push_back(j);
+    }
+    json diags = json::array();
+    for (const auto& d : c.diagnostics)
+        diags.push_back({{"key", d.key},
+                         {"name", d.name},
+                         {"unit", d.unit},
+                         {"value", num(d.value)},
+                         {"uncertainty", opt(d.uncertainty)},
+                         {"share_percent", opt(d.share_percent)},
+                         {"rank", d.rank > 0 ? json(d.rank) : json(nullptr)}});
+    json groups = json::array();
+    for (const auto& g : c.unseparable)
+        groups.push_back({{"keys", g.keys},
+                          {"reason", g.reason},
+                          {"combined_key", g.combined_key.empty() ? json(nullptr) : json(g.combined_key)},
+                          {"combined_value", opt(g.combined_value)},
+                          {"combined_uncertainty", opt(g.combined_uncertainty)}});
+    json tolerance = nullptr;
+    if (c.tolerance_um) {
+        tolerance = {{"circularity_um", *c.tolerance_um}, {"source", c.tolerance_source}, {"pass", c.pass()}};
+        if (c.bidirectional_um) tolerance["bidirectional_pass"] = *c.bidirectional_um <= *c.tolerance_um;
+    }
+    return {
+        {"source", c.source},
+        {"conditions",
+         {{"plane", c.plane},
+          {"radius_mm", num(c.radius_mm)},
+          {"feed_mm_min", num(c.feed_mm_min)},
+          {"feed_in_mm", num(c.feed_in_mm)},
+          {"centre_mm", vec(c.centre_mm)},
+          {"sample_rate_hz", opt(c.sample_rate_hz)},
+          {"samples_used", opt(c.samples_used)},
+          {"bar_temp_C", range(c.bar_temp_C)},
+          {"air_temp_C", range(c.air_temp_C)},
+          {"instrument", c.instrument}}},
+        {"runs", runs},
+        {"bidirectional_circularity_um", opt(c.bidirectional_um)},
+        {"radial_deviation_um", {{"max", num(c.radial_max_um)}, {"min", num(c.radial_min_um)}}},
+        {"tolerance", tolerance},
+        {"diagnostics", diags},
+        {"not_detected", c.not_detected},
+        {"unseparable", groups},
+        {"residual_rms_um", opt(c.residual_rms_um)},
+        {"mean_radius_um", {{"value", opt(c.mean_radius_um)}, {"std_uncertainty", opt(c.mean_radius_uncertainty_um)}}},
+        {"polar_plot",
+         {{"deviation_um_at_outer_ring", num(c.plot_deviation_um)},
+          {"reference", "one least-squares circle for all runs (centre and radius removed)"},
+          {"decimation", "first/min/max/last per angle column"}}}};
+}
+
 }  // namespace
 
 nlohmann::json to_json(const Report& r) {
@@ -148,6 +217,8 @@ nlohmann::json to_json(const Report& r) {
     for (const auto& c : r.compensation)
         comp.push_back({{"axis", c.axis}, {"unit", c.unit}, {"before", num(c.before)}, {"after", num(c.after)}});
     j["compensation"] = {{"metric", r.compensation_metric}, {"axes", comp}};
+    j["circular"] = circular(r);
+    if (!r.circular_note.empty()) j["circular_note"] = r.circular_note;
     return j;
 }
 

@@ -8,6 +8,7 @@
 
 #include "ballbar/analysis/types.hpp"
 #include "ballbar/report/report.hpp"
+#include "circular.hpp"
 #include "document.hpp"
 #include "figures.hpp"
 #include "format.hpp"
@@ -202,12 +203,21 @@ int layout(cairo_surface_t* surface, const Report& r, int total_pages) {
                  (h.machine.name.empty() ? std::string("machine") : h.machine.name) + " · session " +
                      std::to_string(h.session_id) + (h.session_name.empty() ? "" : " (" + h.session_name + ")"),
                  total_pages);
-    doc.title(
-        "Ball-bar session report",
-        (h.session_name.empty() ? "Session " + std::to_string(h.session_id) : h.session_name) + " · " +
-            (h.machine.name.empty() ? std::string(analysis::to_string(h.machine.type))
-                                    : h.machine.name + " (" + std::string(analysis::to_string(h.machine.type)) + ")") +
-            (h.started_at.empty() ? "" : " · " + h.started_at));
+    const bool circular = r.circular || !r.circular_note.empty();
+    doc.title(circular ? "Ball-bar circular test report (ISO 230-4)" : "Ball-bar session report",
+              (h.session_name.empty() ? "Session " + std::to_string(h.session_id) : h.session_name) + " · " +
+                  (circular ? (r.circular ? "plane " + r.circular->plane : std::string("circular test"))
+                   : h.machine.name.empty()
+                       ? std::string(analysis::to_string(h.machine.type))
+                       : h.machine.name + " (" + std::string(analysis::to_string(h.machine.type)) + ")") +
+                  (h.started_at.empty() ? "" : " · " + h.started_at));
+    if (circular) {  // a circular test: its own conditions and figures instead of the SSM's
+        circular_sections(doc, r);
+        doc.heading("Bar reading", 200);
+        figure_trace(doc, r);
+        procedure_section(doc, r);
+        return doc.finish();
+    }
     setup_section(doc, r);
     results_section(doc, r);
     doc.heading("Figures", 200);

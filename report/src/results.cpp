@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "ballbar/analysis/types.hpp"
+#include "circular.hpp"
 
 namespace ballbar::report {
 
@@ -340,7 +341,7 @@ void add_procedure(Report& r, std::string_view kind, const json& p) {
 
 bool is_known_result_kind(std::string_view kind) {
     return kind == "ssm" || kind == "orientation" || kind == "identification" || kind == "discovery" ||
-           kind == "compensation" || kind == "procedure" || kind == "acquisition.transition";
+           kind == "compensation" || kind == "procedure" || kind == "acquisition.transition" || kind == "circular";
 }
 
 bool add_result(Report& report, std::string_view kind, const nlohmann::json& payload) {
@@ -348,7 +349,9 @@ bool add_result(Report& report, std::string_view kind, const nlohmann::json& pay
         if (is_known_result_kind(kind)) throw ReportError("result \"" + std::string(kind) + "\": not a JSON object");
         return false;
     }
-    if (kind == "ssm")
+    if (kind == "circular")
+        add_circular(report, kind, payload);
+    else if (kind == "ssm")
         add_ssm(report, kind, payload);
     else if (kind == "orientation")
         add_orientation(report, kind, payload);

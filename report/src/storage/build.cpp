@@ -11,9 +11,13 @@
 #include <string>
 #include <vector>
 
+#include "../circular.hpp"
+#include "ballbar/analysis/circular.hpp"
 #include "ballbar/report/decimate.hpp"
 #include "ballbar/report/results.hpp"
+#include "ballbar/storage/circular_result.hpp"
 #include "ballbar/storage/session_clock.hpp"
+#include "ballbar/storage/trace_file.hpp"
 
 namespace ballbar::report {
 
@@ -40,6 +44,58 @@ std::string procedure_kind(const storage::Transition& t) {
     if (t.to == SessionState::failed) return "fail";
     if (t.to == SessionState::completed) return "finish";
     return "step";
+}
+
+constexpr std::size_t kPolarColumns = 720;  ///< angle columns of each run's polar plot (≤ 4 points each)
+
+/// The circular test of a session of procedure "circular": its stored result (the latest), else the
+/// analysis made now; the runs' polar plots from the stored samples; the trace's temperatures.
+void add_circular_test(Report& r, storage::Store& store, std::int64_t session_id,
+                       const std::optional<storage::ResultRecord>& stored) {
+    storage::TraceFile trace;
+    try {
+        trace = storage::load_trace(store, session_id);
+    } catch (const storage::StorageError&) {
+        throw;
+    } catch (const std::exception& e) {
+        r.circular_note = std::string("the circular test cannot be read: ") + e.what();
+        return;
+    }
+    if (stored && r.circular) {
+        r.circular->source = "stored result " + std::to_string(stored->id) + " (" + stored->created_at + ")";
+    } else {
+        try {
+            const auto result = analysis::circular::analyze_circular(trace.test, trace.samples);
+            add_result(r, "circular",
+                       nlohmann::json::parse(storage::circular_result_json(result, trace, std::nullopt)));
+            r.circular->source = "analysed for this report (no stored result)";
+        } catch (const analysis::circular::CircularError& e) {
+            r.circular_note = std::string("the circular test cannot be analysed: ") + e.what();
+            return;
+        }
+    }
+    CircularTest& c = *r.circular;
+    // Temperatures as the trace holds them (a trace without a bar temperature column has none).
+    auto range = [](const std::vector<std::optional<double>>& v) {
+        Range out;
+        double sum = 0;
+        std::size_t n = 0;
+        for (const auto& x : v)
+            if (x && std::isfinite(*x))
+                out.min = std::min(out.min.value_or(*x), *x), out.max = std::max(out.max.value_or(*x), *x), sum += *x,
+                ++n;
+        if (n > 0) out.mean = sum / static_cast<double>(n);
+        return out;
+    };
+    c.bar_temp_C = range(trace.bar_temp_C);
+    c.air_temp_C = range(trace.air_temp_C);
+    r.header.bar_temp_C = c.bar_temp_C;
+    r.header.air_temp_C = c.air_temp_C;
+    if (c.instrument.empty()) c.instrument = trace.instrument_json;
+    std::vector<CircularSample> samples;
+    samples.reserve(trace.samples.size());
+    for (const auto& s : trace.samples) samples.push_back({s.time_s, s.measured_mm});
+    circular_polar(c, samples, kPolarColumns);
 }
 
 }  // namespace
@@ -155,7 +211,9 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
             {"at", step.at},       {"time_s", std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0}};
         add_result(r, "acquisition.transition", payload);
     }
+    std::optional<storage::ResultRecord> circular_result;
     for (const auto& res : store.results(session_id)) {
+        if (res.kind == "circular") circular_result = res;
         nlohmann::json payload;
         try {
             payload = nlohmann::json::parse(res.payload_json);
@@ -178,6 +236,7 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
             throw ReportError("result " + std::to_string(res.id) + ": " + e.what());
         }
     }
+    if (info.procedure == "circular") add_circular_test(r, store, session_id, circular_result);
     // The commanded angle of an orientation error: the axis's angle at the points after the rotation.
     for (auto& o : r.orientation) {
         if (o.commanded_rad || o.to_location < 0) continue;

@@ -138,8 +138,64 @@ struct CompensationAxis {
     double before = 0, after = 0;
 };
 
+/// One run of a circular test: its ISO figures, where its data arc lies in time, and its samples on the
+/// polar plot (min/max per angle column, like the bar-reading figure).
+struct CircularRun {
+    std::string direction;  ///< "ccw" or "cw"
+    double start_deg = 0, overshoot_deg = 0, data_arc_deg = 360;
+    double circularity_um = 0;  ///< G
+    double radial_max_um = 0, radial_min_um = 0;
+    std::optional<double> feed_in_end_s, feed_in_lag_ms, data_start_s, data_end_s;
+    std::optional<double> samples;     ///< samples in the data arc
+    std::vector<double> angle_deg;     ///< polar plot: the axes' angle (lag included), 0° = +p towards +q
+    std::vector<double> deviation_um;  ///< polar plot: radial deviation from the common least-squares circle
+};
+
+/// One diagnostic of a circular test, as `circle analyze` reports it.
+struct CircularDiagnostic {
+    std::string key;   ///< the format's JSON key, e.g. "backlash_x_um"
+    std::string name;  ///< e.g. "backlash X"
+    std::string unit;  ///< e.g. "µm", "ppm", "µm/m", "ms", "mm", "Hz"
+    double value = 0;
+    std::optional<double> uncertainty;    ///< standard uncertainty, same unit
+    std::optional<double> share_percent;  ///< of the circular deviation (ranked ones)
+    int rank = 0;                         ///< 1 = largest share; 0: not ranked (pitch, frequency)
+};
+
+struct CircularUnseparable {
+    std::vector<std::string> keys;
+    std::string reason;
+    std::string combined_key;
+    std::optional<double> combined_value, combined_uncertainty;
+};
+
+/// The circular test (ISO 230-4) of a session of procedure "circular": the stored result of
+/// `circle analyze --store`, or the analysis made for the report.
+struct CircularTest {
+    std::string plane;  ///< "XY", "YZ", "ZX"
+    double radius_mm = 0, feed_mm_min = 0, feed_in_mm = 0;
+    Vec3 centre_mm = Vec3::Zero();
+    std::optional<double> sample_rate_hz, samples_used;
+    std::vector<CircularRun> runs;
+    std::optional<double> bidirectional_um;  ///< G(b)
+    double radial_max_um = 0, radial_min_um = 0;
+    std::vector<CircularDiagnostic> diagnostics;  ///< ranked first (by share), then the others
+    std::vector<std::string> not_detected;
+    std::vector<CircularUnseparable> unseparable;
+    std::optional<double> residual_rms_um, mean_radius_um, mean_radius_uncertainty_um;
+    Range bar_temp_C, air_temp_C;        ///< over the trace (air: the trace's column; bar: when it had one)
+    std::string instrument;              ///< the trace's instrument header, as text
+    std::optional<double> tolerance_um;  ///< allowed G: from the command line, else the stored result's
+    std::string tolerance_source;        ///< "given", "stored with the result" or empty
+    std::string source;                  ///< where the figures come from, e.g. "stored result 3 (…)"
+    double plot_deviation_um = 0;        ///< the polar plot's half range (µm at the outer ring)
+    bool pass() const;                   ///< every run's G within the tolerance (false without one)
+};
+
 struct Report {
     Header header;
+    std::optional<CircularTest> circular;  ///< sessions of procedure "circular"
+    std::string circular_note;             ///< why a circular session has no circular figures
     std::vector<ProcedureEvent> procedure;
     std::vector<LocationError> locations;
     std::vector<OrientationError> orientation;
@@ -151,6 +207,10 @@ struct Report {
     std::vector<CompensationAxis> compensation;
     std::string compensation_metric;  ///< what the bars show, e.g. "max |error| over the check path"
 };
+
+/// Judges a circular test against `tolerance_um` (G, µm) given by the user instead of the stored one.
+/// No effect on a report without a circular test.
+void set_circular_tolerance(Report& report, double tolerance_um);
 
 /// The same content as data (schema "ballbar-report/1", docs/report.md).
 nlohmann::json to_json(const Report& report);

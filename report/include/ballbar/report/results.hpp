@@ -18,7 +18,8 @@ bool add_result(Report& report, std::string_view kind, const nlohmann::json& pay
 
 /// Known kinds: "ssm" (ΔV of one location), "orientation" (the angle errors of one test),
 /// "identification" (an identified model), "discovery" (the steps of the discovery workflow),
-/// "compensation" (before/after per axis), "procedure" (one step of the guided procedure).
+/// "compensation" (before/after per axis), "procedure" (one step of the guided procedure), "circular"
+/// (the result of `circle analyze --store`).
 bool is_known_result_kind(std::string_view kind);
 
 }  // namespace ballbar::report
