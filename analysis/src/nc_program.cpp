@@ -267,11 +267,11 @@ bool NcReader::next(NcBlock& block) {
                     // M3.44444e+06, which no reader takes back; found by fuzz_nc_program).
                     std::array<char, 400> word{};
                     word[0] = c;
-                    const auto [end, ec] =
+                    const auto [last, ec] =
                         std::to_chars(word.data() + 1, word.data() + word.size(), v, std::chars_format::fixed);
                     if (ec != std::errc()) throw NcError(line_no, std::string(1, c) + " word out of range");
                     if (!block.extra_words.empty()) block.extra_words += ' ';
-                    block.extra_words.append(word.data(), end);
+                    block.extra_words.append(word.data(), last);
                     break;
                 }
                 case 'X':

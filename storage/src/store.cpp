@@ -166,8 +166,13 @@ Store::Store(const std::string& path, StoreOptions options)
                                      : (std::uint64_t{std::random_device{}()} << 32) ^ std::random_device{}();
     db_.set_busy_timeout(options_.busy_timeout_ms);
 
-    // Read-only checks first: nothing may be written to a file we refuse.
-    check_identity(db_, path);
+    // Read-only checks first: nothing may be written to a file we refuse. In one read transaction, so
+    // that the three reads see one state of a file another process is creating.
+    {
+        Transaction read(db_, false);
+        check_identity(db_, path);
+        read.commit();
+    }
     if (options_.read_only) {  // an older schema is read as it is (see transitions())
         schema_version_ = static_cast<int>(db_.query_int("PRAGMA user_version"));
         if (!is_memory(path)) probe_fd_ = ::open((path + ".lock").c_str(), O_RDONLY | O_CLOEXEC);
