@@ -126,7 +126,7 @@ int run_solve_compensate(const std::string& input_path) {
         json err;
         err["error"] = e.message;
         if (!e.field.empty()) err["field"] = e.field;
-        std::cerr << err.dump() << '\n';
+        std::cerr << err.dump(-1, ' ', false, json::error_handler_t::replace) << '\n';  // input bytes quoted
         return kExitUsage;
     }
 }
