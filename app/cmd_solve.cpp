@@ -101,7 +101,7 @@ json read_request(const std::string& input_path) {
     }
     try {
         return json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
         throw RequestError{std::string("malformed JSON: ") + e.what(), ""};
     }
 }

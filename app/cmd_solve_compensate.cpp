@@ -117,7 +117,7 @@ int run_solve_compensate(const std::string& input_path) {
         json req;
         try {
             req = json::parse(text);
-        } catch (const json::parse_error& e) {
+        } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
             throw BadField{std::string("malformed JSON: ") + e.what(), ""};
         }
         std::cout << solve_compensate(req).dump() << '\n';

@@ -30,4 +30,26 @@ TEST(CliFuzzFindings, ARequestThatIsNotUtf8IsRefusedAsMalformedJson) {
     }
 }
 
+// fuzz_readings: a number past double in a JSON value ("1e999") made the JSON library throw out_of_range,
+// which only parse errors were caught for: `import` ended with the library's message, and `solve` with
+// exit 1. Every JSON input now refuses it as malformed, exit 2.
+TEST(CliFuzzFindings, ANumberPastDoubleInJsonIsRefusedAsMalformed) {
+    TempDir dir;
+    std::ofstream(dir.file("r.csv")) << "# ballbar-readings/1\n"
+                                        "# machine: {\"type\":\"TTTRR\",\"c_offset_mm\":[0,0,1e999]}\n"
+                                        "time_s,location,point,X_mm,Y_mm,Z_mm,A_deg,C_deg,socket_x_mm,socket_y_mm,"
+                                        "socket_z_mm,measured_mm\n"
+                                        "12.0,0,0,32.375,-14.312,-120.042,0,0,-49.275,-14.312,-77.777,100.0021\n";
+    const auto imported = run(dir, "import " + dir.file("r.csv"));
+    EXPECT_EQ(imported.code, 2) << imported.err;
+    EXPECT_NE(imported.err.find("line 2"), std::string::npos) << imported.err;
+    EXPECT_EQ(imported.err.find("error: [json.exception"), std::string::npos)
+        << imported.err;  // ours, not the library's
+
+    std::ofstream(dir.file("req.json")) << R"({"socket_mm":[0,0,1e999],"points_mm":[],"delta_l_mm":[]})";
+    const auto solved = run(dir, "solve ssm --input " + dir.file("req.json"));
+    EXPECT_EQ(solved.code, 2) << solved.err;
+    EXPECT_NE(solved.err.find("malformed JSON"), std::string::npos) << solved.err;
+}
+
 }  // namespace
