@@ -64,7 +64,7 @@ Model parse_model(const std::string& text, const std::string& source) {
     json j;
     try {
         j = json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
         throw CliError(kExitUsage, source + ": malformed JSON: " + e.what());
     }
     if (!j.is_object()) throw CliError(kExitUsage, source + ": a model must be a JSON object");
@@ -214,7 +214,7 @@ ba::NcOffsetTable parse_offsets(const std::string& text, const std::string& sour
     json j;
     try {
         j = json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
         throw CliError(kExitUsage, source + ": malformed JSON: " + e.what());
     }
     if (!j.is_object()) throw CliError(kExitUsage, source + ": the table must be a JSON object");

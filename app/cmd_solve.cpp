@@ -101,7 +101,7 @@ json read_request(const std::string& input_path) {
     }
     try {
         return json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
         throw RequestError{std::string("malformed JSON: ") + e.what(), ""};
     }
 }
@@ -304,10 +304,12 @@ int run(const std::string& input_path, json (*solver)(const json&)) {
         json err;
         err["error"] = e.message;
         if (!e.field.empty()) err["field"] = e.field;
-        std::cerr << err.dump() << '\n';
+        // The message may quote the input's bytes (a parse error's "last read"): not UTF-8 is replaced,
+        // not thrown (found by fuzz_cli_json).
+        std::cerr << err.dump(-1, ' ', false, json::error_handler_t::replace) << '\n';
         return kExitUsage;
     } catch (const ba::AnalysisError& e) {
-        std::cerr << json{{"error", e.what()}}.dump() << '\n';
+        std::cerr << json{{"error", e.what()}}.dump(-1, ' ', false, json::error_handler_t::replace) << '\n';
         return kExitUsage;
     }
 }

@@ -117,7 +117,7 @@ int run_solve_compensate(const std::string& input_path) {
         json req;
         try {
             req = json::parse(text);
-        } catch (const json::parse_error& e) {
+        } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
             throw BadField{std::string("malformed JSON: ") + e.what(), ""};
         }
         std::cout << solve_compensate(req).dump() << '\n';
@@ -126,7 +126,7 @@ int run_solve_compensate(const std::string& input_path) {
         json err;
         err["error"] = e.message;
         if (!e.field.empty()) err["field"] = e.field;
-        std::cerr << err.dump() << '\n';
+        std::cerr << err.dump(-1, ' ', false, json::error_handler_t::replace) << '\n';  // input bytes quoted
         return kExitUsage;
     }
 }

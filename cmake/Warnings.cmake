@@ -15,6 +15,15 @@ if(BALLBAR_SANITIZE)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
+# libFuzzer targets (fuzz/, the `fuzz` preset): every library of ours gets the fuzzer's coverage
+# instrumentation and the sanitizers, so the targets see the edges of the parsers they call. The
+# targets themselves add -fsanitize=fuzzer at link time (libFuzzer's main).
+if(BALLBAR_FUZZ)
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
+                      -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
 # Debian's hardening (what dpkg-buildflags gives packages): fortified libc calls and a read-only,
 # bound-at-start relocation table. Not with the sanitizers, which replace those calls themselves.
 if(NOT BALLBAR_SANITIZE AND NOT BALLBAR_FUZZ)

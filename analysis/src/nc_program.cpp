@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/analysis/nc_program.hpp"
 
+#include <array>
 #include <bit>
 #include <charconv>
 #include <cmath>
@@ -262,10 +263,15 @@ bool NcReader::next(NcBlock& block) {
                     // Machine functions (coolant, spindle, tool change): not simulated, kept on rewrite.
                     if (c != 'S' && !is_integer(v))
                         throw NcError(line_no, std::string(1, c) + " word must be an integer");
-                    char word[40];
-                    std::snprintf(word, sizeof word, "%c%g", c, v);
+                    // The shortest fixed-point text that reads back to v ("%g" wrote M3444444 as
+                    // M3.44444e+06, which no reader takes back; found by fuzz_nc_program).
+                    std::array<char, 400> word{};
+                    word[0] = c;
+                    const auto [last, ec] =
+                        std::to_chars(word.data() + 1, word.data() + word.size(), v, std::chars_format::fixed);
+                    if (ec != std::errc()) throw NcError(line_no, std::string(1, c) + " word out of range");
                     if (!block.extra_words.empty()) block.extra_words += ' ';
-                    block.extra_words += word;
+                    block.extra_words.append(word.data(), last);
                     break;
                 }
                 case 'X':
@@ -392,7 +398,13 @@ void write_nc_block(std::string& out, const NcBlock& b, NcDialect dialect) {
     if (b.feed_mm_min && b.motion == NcMotion::Feed) append_number(out, 'F', *b.feed_mm_min, 1);
     if (!b.comment.empty()) {
         if (out.size() > start) out += ' ';
-        out.append("(").append(b.comment).append(")");
+        // Inside ( ) a comment cannot hold parentheses (a ';' comment of LinuxCNC can) nor control
+        // characters: brackets and blanks instead, so that the line reads back.
+        out += '(';
+        for (const char c : b.comment) {
+            out += c == '(' ? '[' : c == ')' ? ']' : (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? ' ' : c;
+        }
+        out += ')';
     }
     if (out.size() > start) out += '\n';
 }

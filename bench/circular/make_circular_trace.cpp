@@ -2,12 +2,14 @@
 // Writes one ballbar-trace/1 file from the independent generator, for the whole-process timing of
 // `ballbar circle analyze` and for trying the CLI by hand.
 //   make_circular_trace OUT.csv [--samples N] [--seed S] [--plane XY|YZ|ZX] [--partial]
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <random>
+#include <string>
 
 #include "trace_generator.hpp"
 
@@ -50,7 +52,19 @@ int main(int argc, char** argv) {
     }();
     c.spec.sample_hz = static_cast<double>(samples) / (arc_s + 2.0);
     const GenTrace g = generate(c.spec, c.fx, rng);
-    std::ofstream(argv[1], std::ios::binary) << to_file(c.spec, g);
+    // A new file only: never write over what this program did not create ("x": exclusive creation).
+    std::FILE* out = std::fopen(argv[1], "wbx");
+    if (!out) {
+        std::fprintf(stderr, "make_circular_trace: cannot create %s (it exists, or: %s); nothing written\n", argv[1],
+                     std::strerror(errno));
+        return 1;
+    }
+    const std::string text = to_file(c.spec, g);
+    const bool ok = std::fwrite(text.data(), 1, text.size(), out) == text.size();
+    if (std::fclose(out) != 0 || !ok) {
+        std::fprintf(stderr, "make_circular_trace: writing %s failed\n", argv[1]);
+        return 1;
+    }
     std::fprintf(stderr, "%zu samples at %.1f Hz\n", g.time_s.size(), c.spec.sample_hz);
     return 0;
 }

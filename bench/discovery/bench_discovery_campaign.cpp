@@ -8,9 +8,11 @@
 // `--write-readings FILE ROWS` writes ROWS readings of a TTTRR session with a once-per-revolution C
 // error of 80 µrad and a scale error of X instead (for run_discover_100k.sh).
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <string>
 #include <string_view>
@@ -33,8 +35,16 @@ int main(int argc, char** argv) {
             const int per_plan = static_cast<int>(indep::generate(sc.m, rng).rows.size());
             indep::Readings r = indep::generate(sc.m, rng, static_cast<int>((rows + per_plan - 1) / per_plan), 0.3);
             r.rows.resize(static_cast<std::size_t>(rows));
-            std::ofstream(argv[i + 1]) << r.text();
-            return 0;
+            // A new file only: never write over what this program did not create ("x": exclusive creation).
+            std::FILE* out = std::fopen(argv[i + 1], "wx");
+            if (!out) {
+                std::fprintf(stderr, "cannot create %s (it exists, or: %s); nothing written\n", argv[i + 1],
+                             std::strerror(errno));
+                return 1;
+            }
+            const std::string text = r.text();
+            const bool ok = std::fwrite(text.data(), 1, text.size(), out) == text.size();
+            return std::fclose(out) == 0 && ok ? 0 : 1;
         }
         if (a == "--seeds" && i + 1 < argc) seeds = std::atoi(argv[++i]);
         if (a == "--clean" && i + 1 < argc) clean = std::atoi(argv[++i]);

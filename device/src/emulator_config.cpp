@@ -255,7 +255,7 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
     json j;
     try {
         j = json::parse(json_text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
         throw std::invalid_argument(std::string("emulator config: not valid JSON: ") + e.what());
     }
     EmulatorConfig c;

@@ -157,8 +157,18 @@ std::unique_ptr<Transport> open_termios_format(const std::string& path, const Se
     if (f.stop_bits == 2) t.c_cflag |= CSTOPB;
     ::cfsetispeed(&t, termios_speed(baud));
     ::cfsetospeed(&t, termios_speed(baud));
-    if (::tcsetattr(fd, TCSANOW, &t) != 0) {
-        const int err = errno;
+    int err = ::tcsetattr(fd, TCSANOW, &t) == 0 ? 0 : errno;
+    if (err == EINVAL && (f.data_bits != 8 || f.parity != 'N') && is_pseudo_terminal(path)) {
+        // A pseudo-terminal has no line format to carry: Linux's pty driver forces 8 data bits without
+        // parity on every tcsetattr, and refuses (EINVAL) a request for 7 bits or parity once the pty
+        // already holds that forced result — the second open of the same pty (a reconnect, the next
+        // process: the Sylvac's 7E2). Ask again for what a pty keeps: the baud rate, the stop bits,
+        // raw mode.
+        t.c_cflag &= ~static_cast<tcflag_t>(CSIZE | PARENB | PARODD);
+        t.c_cflag |= CS8;
+        err = ::tcsetattr(fd, TCSANOW, &t) == 0 ? 0 : errno;
+    }
+    if (err != 0) {
         ::close(fd);
         throw DeviceError(DeviceErrorKind::Io, "serial:" + path + ": cannot configure: " + std::strerror(err));
     }

@@ -40,7 +40,7 @@ json parse_object(std::string_view text, std::string_view what) {
     json j;
     try {
         j = json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
         throw FormatError(std::string(what) + " is not valid JSON: " + e.what());
     }
     if (!j.is_object()) throw FormatError(std::string(what) + " must be a JSON object");

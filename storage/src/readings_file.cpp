@@ -225,8 +225,8 @@ bool header_line(std::string_view line, int lineno, Header& h, std::map<std::str
     json v;
     try {
         v = json::parse(value);
-    } catch (const json::parse_error& e) {
-        if (!known) return false;  // a comment that happens to contain a colon
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
+        if (!known) return false;         // a comment that happens to contain a colon
         throw ReadingsFileError(lineno, "the value of \"" + key + "\" is not one line of JSON: " + e.what());
     }
     if (const auto it = seen.find(key); it != seen.end()) {

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <thread>
 
 #include "ballbar/storage/machine_json.hpp"
 #include "schema.hpp"
@@ -39,6 +40,79 @@ std::uint64_t splitmix64(std::uint64_t& state) {
 
 bool is_memory(const std::string& path) {
     return path.empty() || path == ":memory:" || path.rfind("file::memory:", 0) == 0;
+}
+
+/// Refuses (throws) a file written by a newer ballbar, or by another application.
+void check_identity(Database& db, const std::string& path) {
+    const std::int64_t version = db.query_int("PRAGMA user_version");
+    const std::int64_t app_id = db.query_int("PRAGMA application_id");
+    if (version > Store::kSchemaVersion) {
+        throw StorageError(Kind::newer_schema, path + " has schema version " + std::to_string(version) +
+                                                   ", newer than this ballbar understands (" +
+                                                   std::to_string(Store::kSchemaVersion) +
+                                                   "); upgrade ballbar. The file was not changed.");
+    }
+    if (app_id != 0 && app_id != Store::kApplicationId) {
+        throw StorageError(Kind::invalid, path + " is an SQLite database of another application; not changed");
+    }
+    if (app_id == 0 && db.query_int("SELECT count(*) FROM sqlite_schema") > 0) {
+        throw StorageError(Kind::invalid, path + " is an SQLite database but not a ballbar one; not changed");
+    }
+}
+
+/// What to say about a file that fails the quick check: refused for writing, and how to save what can
+/// still be read. (Debian's sqlite3 has no working `.recover`: its library lacks the sqlite_dbpage
+/// table; `.dump` copies every row it can read and ends with ROLLBACK when it met damage.)
+std::string damaged_message(const std::string& path, const std::string& problems, std::int64_t version) {
+    return path + " is damaged: it fails SQLite's quick check (" + problems +
+           "). ballbar will not write to it (the file was not changed); `ballbar sessions`, `sessions show`, "
+           "`export` and `report` still read it as far as the damage allows. To save what can be read into a "
+           "new database, export each session (`ballbar --db " +
+           path + " export ID --out ID.csv`, then `ballbar --db NEW.db import ID.csv`), or copy every readable row: " +
+           "`(sqlite3 " + path +
+           " .dump | sed 's/^ROLLBACK; -- due to errors$/COMMIT;/'; echo 'PRAGMA user_version = " +
+           std::to_string(version) + "; PRAGMA application_id = " + std::to_string(Store::kApplicationId) +
+           ";') | sqlite3 NEW.db`. Keep " + path + " until NEW.db is checked.";
+}
+
+/// SQLite's quick check (the b-trees, their pages and order; not the index contents): "" when it
+/// passes, else the message that refuses the file for writing.
+std::string quick_check(Database& db, const std::string& path) {
+    if (is_memory(path)) return {};
+    const std::int64_t version = db.query_int("PRAGMA user_version");  // read before (check_identity)
+    std::string problems;
+    int count = 0;
+    try {
+        auto st = db.prepare("PRAGMA quick_check(3)");
+        while (st.step()) {
+            const std::string line = st.column_text(0);
+            if (line == "ok") break;
+            problems += (count++ ? "; " : "") + line;
+        }
+    } catch (const StorageError& e) {
+        if (e.kind() != Kind::corrupt) throw;
+        problems = e.what();
+        count = 1;
+    }
+    if (count == 0) return {};
+    return damaged_message(path, problems, version);
+}
+
+void set_wal(Database& db, int busy_timeout_ms) {
+    // Switching to WAL takes an exclusive lock; another process opening the file at the same moment can
+    // make it fail at once with "database is locked" (the busy handler is not always consulted): retry
+    // until the busy timeout is over.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(busy_timeout_ms);
+    for (;;) {
+        try {
+            if (db.query_text("PRAGMA journal_mode = WAL") == "wal") return;
+        } catch (const StorageError& e) {
+            if (e.kind() != Kind::busy || std::chrono::steady_clock::now() >= deadline) throw;
+        }
+        if (std::chrono::steady_clock::now() >= deadline)
+            throw StorageError(Kind::busy, "cannot switch " + db.path() + " to WAL mode: it stays locked");
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
 }
 
 }  // namespace
@@ -92,29 +166,37 @@ Store::Store(const std::string& path, StoreOptions options)
                                      : (std::uint64_t{std::random_device{}()} << 32) ^ std::random_device{}();
     db_.set_busy_timeout(options_.busy_timeout_ms);
 
-    // Read-only checks first: nothing may be written to a file we refuse.
-    const std::int64_t version = db_.query_int("PRAGMA user_version");
-    const std::int64_t app_id = db_.query_int("PRAGMA application_id");
-    if (version > kSchemaVersion) {
-        throw StorageError(Kind::newer_schema, path + " has schema version " + std::to_string(version) +
-                                                   ", newer than this ballbar understands (" +
-                                                   std::to_string(kSchemaVersion) +
-                                                   "); upgrade ballbar. The file was not changed.");
+    // Read-only checks first: nothing may be written to a file we refuse. In one read transaction, so
+    // that the three reads see one state of a file another process is creating.
+    {
+        Transaction read(db_, false);
+        check_identity(db_, path);
+        read.commit();
     }
-    if (app_id != 0 && app_id != kApplicationId) {
-        throw StorageError(Kind::invalid, path + " is an SQLite database of another application; not changed");
-    }
-    if (app_id == 0 && db_.query_int("SELECT count(*) FROM sqlite_schema") > 0) {
-        throw StorageError(Kind::invalid, path + " is an SQLite database but not a ballbar one; not changed");
-    }
-    schema_version_ = static_cast<int>(version);
     if (options_.read_only) {  // an older schema is read as it is (see transitions())
+        schema_version_ = static_cast<int>(db_.query_int("PRAGMA user_version"));
         if (!is_memory(path)) probe_fd_ = ::open((path + ".lock").c_str(), O_RDONLY | O_CLOEXEC);
+        return;
+    }
+    // The quick check reads the whole file (about 1 s of CPU for 10 M samples, 260 MB): paid by the opens
+    // that write — measure, import, demo, a resume —, not by a reader's open (no recovery: `sessions`,
+    // `export`, `circle analyze`), which writes nothing to a file of the current schema.
+    const bool reader = !options_.recover;
+    const bool migrates = db_.query_int("PRAGMA user_version") < kSchemaVersion;
+    if (const std::string damage = reader && !migrates ? std::string() : quick_check(db_, path); !damage.empty()) {
+        // Refused for writing. A reader's open (a migration would write) reads it read-only instead, so
+        // that what can be read can be saved.
+        if (!reader) throw StorageError(Kind::corrupt, damage);
+        options_.read_only = true;
+        db_ = Database(path, Database::Mode::read_only);
+        db_.set_busy_timeout(options_.busy_timeout_ms);
+        schema_version_ = static_cast<int>(db_.query_int("PRAGMA user_version"));
+        probe_fd_ = ::open((path + ".lock").c_str(), O_RDONLY | O_CLOEXEC);
         return;
     }
 
     if (!is_memory(path)) {
-        db_.exec("PRAGMA journal_mode = WAL");
+        set_wal(db_, options_.busy_timeout_ms);
         lock_fd_ = ::open((path + ".lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
         if (lock_fd_ < 0) {
             throw StorageError(Kind::sqlite, "cannot open the session lock file " + path + ".lock");
@@ -122,7 +204,15 @@ Store::Store(const std::string& path, StoreOptions options)
     }
     db_.exec(options_.sync_full ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
     db_.exec("PRAGMA foreign_keys = ON");
-    migrate();
+    {
+        // The schema is created (or migrated) under the write lock, and the checks are made again under
+        // it: of several processes that first open a new file at once, one creates the tables, the others
+        // wait for it (busy timeout) and then find them, instead of creating them a second time.
+        Transaction tx(db_);  // BEGIN IMMEDIATE
+        check_identity(db_, path);
+        migrate();
+        tx.commit();
+    }
     schema_version_ = kSchemaVersion;
     if (options_.recover) recover_unfinished();
 }

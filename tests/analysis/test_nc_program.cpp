@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -38,6 +39,33 @@ TEST(NcProgram, ParsesLinuxCncDwellInSecondsAndSemicolonComments) {
     ASSERT_EQ(p.blocks.size(), 4u);
     EXPECT_EQ(p.blocks[1].comment, "approach");
     EXPECT_DOUBLE_EQ(p.blocks[2].dwell_s, 2.5);
+}
+
+// Found by fuzz_nc_program: a LinuxCNC ';' comment may hold parentheses and control characters; written
+// back inside ( ) they ended the comment early and the program did not read back ("unexpected
+// character").
+TEST(NcProgram, ACommentWithParenthesesIsWrittenSoThatItReadsBack) {
+    const ba::NcProgram p = ba::parse_nc_program("G1 X1 F100 ; tool (T2) reset \x01 (ok\n", ba::NcDialect::LinuxCNC);
+    ASSERT_EQ(p.blocks.size(), 1u);
+    const std::string text = ba::write_nc_program(p);
+    EXPECT_NE(text.find("(tool [T2] reset"), std::string::npos) << text;
+    ba::NcProgram back;
+    ASSERT_NO_THROW(back = ba::parse_nc_program(text, ba::NcDialect::LinuxCNC)) << text;
+    const auto moves =
+        std::find_if(back.blocks.begin(), back.blocks.end(), [](const ba::NcBlock& b) { return b.X_mm; });
+    ASSERT_NE(moves, back.blocks.end()) << text;
+    EXPECT_EQ(moves->X_mm, p.blocks[0].X_mm);
+    EXPECT_EQ(moves->comment, "tool [T2] reset   [ok");
+}
+
+// Found by fuzz_nc_program: machine-function words were kept as "%g" text, so M3444444 was written
+// back as M3.44444e+06 (and S12345678 lost digits); they are kept as the shortest text that reads back.
+TEST(NcProgram, LargeMachineFunctionWordsAreWrittenBackExactly) {
+    const ba::NcProgram p = ba::parse_nc_program("G1 X1 F100 M3444444 S12345678.5 T7\n", ba::NcDialect::Fanuc);
+    ASSERT_EQ(p.blocks.size(), 1u);
+    EXPECT_EQ(p.blocks[0].extra_words, "M3444444 S12345678.5 T7");
+    const std::string text = ba::write_nc_program(p);
+    EXPECT_NO_THROW((void)ba::parse_nc_program(text, ba::NcDialect::Fanuc)) << text;
 }
 
 TEST(NcProgram, WriteThenParseRoundTripsBothDialects) {

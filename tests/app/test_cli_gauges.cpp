@@ -24,11 +24,13 @@ namespace {
 
 class GaugeChild {
   public:
-    explicit GaugeChild(std::vector<std::string> args) {
+    /// `cwd`: the child's working directory (where `measure` writes a retry program), if not ours.
+    explicit GaugeChild(std::vector<std::string> args, const std::string& cwd = {}) {
         int fds[2];
         if (::pipe(fds) != 0) throw std::runtime_error("pipe");
         posix_spawn_file_actions_t fa;
         posix_spawn_file_actions_init(&fa);
+        if (!cwd.empty()) posix_spawn_file_actions_addchdir_np(&fa, cwd.c_str());
         posix_spawn_file_actions_adddup2(&fa, fds[1], STDOUT_FILENO);
         posix_spawn_file_actions_addclose(&fa, fds[0]);
         std::vector<char*> argv;
@@ -40,10 +42,16 @@ class GaugeChild {
         out_ = fds[0];
     }
     ~GaugeChild() {
-        ::kill(pid_, SIGTERM);
+        if (pid_ > 0) stop(SIGTERM);
+        ::close(out_);
+    }
+    /// Sends `sig` and waits: the exit status (waitpid's).
+    int stop(int sig) {
+        ::kill(pid_, sig);
         int status = 0;
         ::waitpid(pid_, &status, 0);
-        ::close(out_);
+        pid_ = -1;
+        return status;
     }
     std::string line(int timeout_ms) {
         std::string s;
@@ -76,6 +84,90 @@ TEST_P(GaugeCli, EmulateThenMonitor) {
     EXPECT_GE(j.at("samples").get<int>(), 40);
     EXPECT_GT(j.at("resolution_mm").get<double>(), 0);
     EXPECT_EQ(j.at("timeouts").get<int>(), 0);
+}
+
+// `ballbar measure` on a gauge behind `ballbar emulate --instrument KIND --pty`, as two processes: it
+// connects, identifies the gauge, measures its rate and resolution, zeroes it in the calibrator and runs
+// the program (the emulated gauge is still: no point is captured); Ctrl-C then stops it (exit 3) with the
+// gauge's identity, resolution and measured rate stored. Twice on one emulator: the second `measure`
+// opens the pty the first one configured (what failed for the Sylvac: docs/instruments.md).
+TEST_P(GaugeCli, MeasureOnAnEmulatedGaugeConnectsZeroesAndStoresTheGauge) {
+    GaugeChild emu({BALLBAR_EXE, "emulate", "--instrument", GetParam(), "--pty", "--rate", "20"});
+    const std::string path = emu.line(5000);
+    ASSERT_EQ(path.rfind("/dev/pts/", 0), 0u) << "emulate printed '" << path << "'";
+    ballbar::test::TempDir dir;
+    const std::string data = std::string(BALLBAR_TEST_DATA_DIR) + "/machines/";
+    for (int run = 1; run <= 2; ++run) {
+        SCOPED_TRACE("measure " + std::to_string(run));
+        GaugeChild measure({BALLBAR_EXE, "--db", dir.file("test.db"), "measure", "--json", "--non-interactive",
+                            "--device", GetParam() + ":" + path, "--machine", data + "tttrr.json", "--plan",
+                            data + "tttrr-quick.plan.json", "--program", dir.file("m" + std::to_string(run) + ".nc")},
+                           dir.path.string());
+        std::string events;
+        bool running = false;
+        for (std::string l; !running && !(l = measure.line(15000)).empty();) {
+            events += l + "\n";
+            running = l.find("\"event\":\"run_program\"") != std::string::npos;
+        }
+        ASSERT_TRUE(running) << "measure did not get to the program:\n" << events;
+        for (std::string l; !(l = measure.line(1500)).empty();) events += l + "\n";  // a second of streaming
+        const int status = measure.stop(SIGINT);
+        EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 3) << "status " << status << "\n" << events;
+        EXPECT_EQ(events.find("reconnect"), std::string::npos) << "the gauge was lost:\n" << events;
+
+        const auto show = ballbar::test::run(dir, "sessions show " + std::to_string(run) + " --json");
+        ASSERT_EQ(show.code, 0) << show.err;
+        const auto j = nlohmann::json::parse(show.out);
+        EXPECT_EQ(j.at("session").at("state"), "interrupted") << show.out;
+        const std::string model = j.at("session").at("instrument").at("model");
+        EXPECT_EQ(model.rfind(GetParam() == "sylvac"      ? "Sylvac"
+                              : GetParam() == "digimatic" ? "Mitutoyo"
+                                                          : "Modbus",
+                              0),
+                  0u)
+            << model;
+        const auto segs = j.at("sample_segments");
+        ASSERT_GE(segs.size(), 1u) << show.out;
+        EXPECT_GT(segs[0].at("resolution_mm").get<double>(), 0) << show.out;
+        // Measured over the run (with its pauses, longer on a loaded machine): never above the gauge's pace.
+        const double rate = segs[0].at("reading_rate_hz").get<double>();
+        EXPECT_GT(rate, 0) << show.out;
+        EXPECT_LE(rate, 22) << show.out;
+    }
+}
+
+// Issue 15: a session whose writer died is shown as interrupted by every reader — `sessions`, `sessions
+// show`, `report` — without any writer opening the file first (the kernel drops the writer's lock).
+TEST(GaugeCliKilled, AMeasureKilledWithSigkillIsInterruptedForEveryReader) {
+    GaugeChild emu({BALLBAR_EXE, "emulate", "--instrument", "digimatic", "--pty", "--rate", "20"});
+    const std::string path = emu.line(5000);
+    ASSERT_EQ(path.rfind("/dev/pts/", 0), 0u) << "emulate printed '" << path << "'";
+    ballbar::test::TempDir dir;
+    const std::string data = std::string(BALLBAR_TEST_DATA_DIR) + "/machines/";
+    {
+        GaugeChild measure({BALLBAR_EXE, "--db", dir.file("test.db"), "measure", "--json", "--non-interactive",
+                            "--device", "digimatic:" + path, "--machine", data + "tttrr.json", "--plan",
+                            data + "tttrr-quick.plan.json", "--program", dir.file("m.nc")},
+                           dir.path.string());
+        bool running = false;
+        for (std::string l; !running && !(l = measure.line(15000)).empty();)
+            running = l.find("\"event\":\"run_program\"") != std::string::npos;
+        ASSERT_TRUE(running);
+        const int status = measure.stop(SIGKILL);
+        ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    }
+    const auto listed = ballbar::test::run(dir, "sessions");
+    ASSERT_EQ(listed.code, 0) << listed.err;
+    EXPECT_NE(listed.out.find("interrupted"), std::string::npos) << listed.out;
+    EXPECT_EQ(listed.out.find("running"), std::string::npos) << listed.out;
+    const auto show = ballbar::test::run(dir, "sessions show 1 --json");
+    ASSERT_EQ(show.code, 0) << show.err;
+    const auto j = nlohmann::json::parse(show.out);
+    EXPECT_EQ(j.at("session").at("state"), "interrupted");
+    EXPECT_NE(j.at("session").at("state_reason").get<std::string>().find("writer is gone"), std::string::npos);
+    const auto report = ballbar::test::run(dir, "report 1 --json");
+    ASSERT_EQ(report.code, 0) << report.err;
+    EXPECT_EQ(nlohmann::json::parse(report.out).at("header").at("status"), "interrupted") << report.out;
 }
 
 TEST_P(GaugeCli, DemoRecoversTheInjectedErrors) {

@@ -126,6 +126,22 @@ TEST(GaugeLineSettings, SylvacUriParametersDoNotChangeTheLine) {
     expect_line(open_and_observe("sylvac:", "?sign=-1&rate=25"), {B4800, CS7, true, false, true});
 }
 
+// The second open of the same pty (a reconnect, the next `measure` on one `emulate`): Linux refuses a
+// request for 7 bits and parity once the pty holds the 8N it forces (EINVAL); the transport asks again
+// for what a pty keeps, and the line stays 4800 baud with 2 stop bits.
+TEST(GaugeLineSettings, SylvacOpensTheSamePtyAgainAndAgain) {
+    PseudoTerminal pty;
+    for (int i = 0; i < 4; ++i) {
+        SCOPED_TRACE("open " + std::to_string(i + 1));
+        EXPECT_NO_THROW((void)open_gauge("sylvac:" + pty.path()));
+    }
+    termios m{};
+    ASSERT_EQ(::tcgetattr(pty.master(), &m), 0);
+    EXPECT_EQ(cfgetospeed(&m), static_cast<speed_t>(B4800));
+    EXPECT_NE(m.c_cflag & CSTOPB, 0u);
+    EXPECT_EQ(m.c_lflag & (ICANON | ECHO | ISIG), 0u);
+}
+
 TEST(GaugeLineSettings, DigimaticAdaptorIs9600Baud8N1) {
     expect_line(open_and_observe("digimatic:"), {B9600, CS8, false, false, false});
 }

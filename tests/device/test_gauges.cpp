@@ -41,6 +41,19 @@ TEST(GaugeCodecs, ItnDataAndStatusLines) {
     EXPECT_EQ(decode_itn("01A+000.123\r").result, Decode::Invalid);   // seven characters
 }
 
+// Found by fuzz_gauge_replies: a status line with a code past int ("9" and eleven digits, "E" and
+// twelve) converted a double that does not fit into int (undefined behaviour). It is a gauge error.
+TEST(GaugeCodecs, StatusCodesPastIntAreGaugeErrors) {
+    const Decoded itn = decode_itn("948912345678\r");
+    ASSERT_EQ(itn.result, Decode::Valid);
+    EXPECT_EQ(itn.reading.status, ReadingStatus::Error);
+    EXPECT_EQ(itn.reading.code, 999'999'999);
+    const Decoded sylvac = decode_sylvac("E123456789012\r");
+    ASSERT_EQ(sylvac.result, Decode::Valid);
+    EXPECT_EQ(sylvac.reading.status, ReadingStatus::Error);
+    EXPECT_EQ(sylvac.reading.code, 999'999'999);
+}
+
 TEST(GaugeCodecs, SpcFrameFromTheManufacturersExample) {
     // d1..d13 = F F F F 0 2 1 0 7 6 5 4 0: +210765 × 10⁻⁴ mm = +21.0765 mm.
     const std::uint8_t frame[13] = {0xF, 0xF, 0xF, 0xF, 0, 2, 1, 0, 7, 6, 5, 4, 0};

@@ -25,7 +25,9 @@ Decoded decode_itn(std::string_view rx) {
     }
     if (t.size() >= 2 && t[0] == '9') {
         if (auto code = parse_decimal(t); code && code->decimals == 0) {
-            d.reading.code = static_cast<int>(code->value);
+            // Up to 12 digits parse; a code past int is no code we know (found by fuzz_gauge_replies: the
+            // conversion was undefined).
+            d.reading.code = code->value < 1e9 ? static_cast<int>(code->value) : 999'999'999;
             d.reading.status = d.reading.code == 918   ? ReadingStatus::NotReady
                                : d.reading.code == 911 ? ReadingStatus::OutOfRange
                                                        : ReadingStatus::Error;

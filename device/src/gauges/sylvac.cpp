@@ -17,7 +17,9 @@ Decoded decode_sylvac(std::string_view rx) {
     }
     if (d.text.size() >= 2 && d.text[0] == 'E') {
         if (auto code = parse_decimal(d.text.substr(1)); code && code->decimals == 0 && code->value >= 0) {
-            d.reading.code = static_cast<int>(code->value);
+            // Up to 12 digits parse; a code past int is no code we know (found by fuzz_gauge_replies: the
+            // conversion was undefined).
+            d.reading.code = code->value < 1e9 ? static_cast<int>(code->value) : 999'999'999;
             d.reading.status = d.reading.code == 1   ? ReadingStatus::NotReady
                                : d.reading.code == 2 ? ReadingStatus::OutOfRange
                                                      : ReadingStatus::Error;

@@ -217,7 +217,7 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
         nlohmann::json payload;
         try {
             payload = nlohmann::json::parse(res.payload_json);
-        } catch (const nlohmann::json::parse_error& e) {
+        } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for a number past double
             throw ReportError("result " + std::to_string(res.id) + " (" + res.kind +
                               "): payload is not JSON: " + e.what());
         }
