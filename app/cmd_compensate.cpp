@@ -119,7 +119,7 @@ Model load_model(const std::string& spec, const Globals& globals) {
         if (const auto r = store.latest_model(spec))
             return parse_model(r->params_json, "model " + r->name + " v" + std::to_string(r->version));
     } catch (const bs::StorageError& e) {
-        throw CliError(kExitUsage, "model " + spec + ": " + e.what());
+        throw CliError(kExitUsage, e.what());  // "no model 99", said once
     }
     throw CliError(kExitUsage, "model '" + spec + "': no such file, model id or model name");
 }

@@ -2,6 +2,7 @@
 // What `sessions show` says of each stored result: its values, with units and uncertainties
 // (figures.hpp). The payloads are the ones app/ stores (acquisition_adapters.cpp, cmd_identify.cpp,
 // cmd_discover.cpp, cmd_demo.cpp, gauge_source.cpp); anything else shows its numbers by name.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -24,15 +25,25 @@ bool vec3(const json& j, const char* key) {
            j[key][1].is_number() && j[key][2].is_number();
 }
 
-/// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm" from mm.
+/// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm" from mm: two significant digits of the smallest
+/// uncertainty fix the decimals (2 to 4).
 std::string vec_um(const json& v, const json* std) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "(%.2f, %.2f, %.2f)", v[0].get<double>() * 1e3, v[1].get<double>() * 1e3,
-                  v[2].get<double>() * 1e3);
+    int decimals = 2;
+    if (std) {
+        double smallest = 0;
+        for (std::size_t a = 0; a < 3; ++a) {
+            const double s = (*std)[a].get<double>() * 1e3;
+            if (s > 0 && (smallest == 0 || s < smallest)) smallest = s;
+        }
+        if (smallest > 0) decimals = std::clamp(1 - static_cast<int>(std::floor(std::log10(smallest))), 2, 4);
+    }
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "(%.*f, %.*f, %.*f)", decimals, v[0].get<double>() * 1e3, decimals,
+                  v[1].get<double>() * 1e3, decimals, v[2].get<double>() * 1e3);
     std::string out = buf;
     if (std) {
-        std::snprintf(buf, sizeof buf, " ± (%.2f, %.2f, %.2f)", (*std)[0].get<double>() * 1e3,
-                      (*std)[1].get<double>() * 1e3, (*std)[2].get<double>() * 1e3);
+        std::snprintf(buf, sizeof buf, " ± (%.*f, %.*f, %.*f)", decimals, (*std)[0].get<double>() * 1e3, decimals,
+                      (*std)[1].get<double>() * 1e3, decimals, (*std)[2].get<double>() * 1e3);
         out += buf;
     }
     return out + " µm";
