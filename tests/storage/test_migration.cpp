@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "ballbar/storage/imports.hpp"
+#include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/sqlite.hpp"
 #include "ballbar/storage/store.hpp"
 #include "schema.hpp"  // storage/src: the migrations as the store applies them
@@ -197,8 +198,11 @@ void make_v4(const std::string& path) {
     for (int v = 0; v < 4; ++v) db.exec(detail::kMigrations[static_cast<std::size_t>(v)]);
     db.exec("PRAGMA user_version = 4");
     db.exec("PRAGMA application_id = " + std::to_string(Store::kApplicationId));
+    analysis::MachineGeometry m;
+    m.type = analysis::MachineType::TTTRR;
+    auto st = db.prepare("INSERT INTO machines(id, name, type, geometry_json) VALUES (1, 'm', 'TTTRR', ?)");
+    st.bind(1, machine_to_json(m)).run();
     db.exec(R"sql(
-INSERT INTO machines(id, name, type, geometry_json) VALUES (1, 'm', 'TTTRR', '{"type":"TTTRR"}');
 INSERT INTO sessions(id, uuid, machine_id, source, state, procedure, started_at) VALUES
   (1, '44444444-4444-4444-8444-444444444441', 1, 'imported', 'completed', 'import', '2026-11-01T10:00:00.000Z');
 )sql");
