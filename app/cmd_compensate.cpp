@@ -104,7 +104,11 @@ Model parse_model(const std::string& text, const std::string& source) {
 Model load_model(const std::string& spec, const Globals& globals) {
     std::error_code ec;
     if (std::filesystem::is_regular_file(spec, ec)) return parse_model(read_file(spec, "model"), spec);
-    bs::Store store(resolve_db_path(globals));
+    const std::string db = resolve_db_path(globals);
+    if (!std::filesystem::exists(db, ec))  // a model id or name is looked up in an existing database only
+        throw CliError(kExitUsage, "model '" + spec + "': no such file, and no database at " + db +
+                                       " for a model id or name" + (globals.db_path.empty() ? "" : " (check --db)"));
+    bs::Store store(db);
     const bool numeric =
         !spec.empty() && std::all_of(spec.begin(), spec.end(), [](char c) { return c >= '0' && c <= '9'; });
     try {
@@ -115,7 +119,7 @@ Model load_model(const std::string& spec, const Globals& globals) {
         if (const auto r = store.latest_model(spec))
             return parse_model(r->params_json, "model " + r->name + " v" + std::to_string(r->version));
     } catch (const bs::StorageError& e) {
-        throw CliError(kExitUsage, "model " + spec + ": " + e.what());
+        throw CliError(kExitUsage, e.what());  // "no model 99", said once
     }
     throw CliError(kExitUsage, "model '" + spec + "': no such file, model id or model name");
 }
@@ -416,10 +420,10 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
         if (s.truncated) report << "the program has no end (M2/M30/%): compensated as it is (--allow-truncated)\n";
     }
     if (s.not_converged > 0) {
-        std::cerr << "ballbar: --exact did not converge for " << s.not_converged << " point(s), lines";
-        for (int l : s.not_converged_lines) std::cerr << ' ' << l;
-        std::cerr << (failed ? "; nothing written (--force writes it anyway)\n" : "; written (--force)\n");
-        return kExitFailure;
+        std::string msg = "--exact did not converge for " + std::to_string(s.not_converged) + " point(s), lines";
+        for (int l : s.not_converged_lines) msg += ' ' + std::to_string(l);
+        throw CliError(kExitFailure,
+                       msg + (failed ? "; nothing written (--force writes it anyway)" : "; written (--force)"));
     }
     return kExitOk;
 }

@@ -27,6 +27,7 @@
 #include "ballbar/device/uri.hpp"
 #include "circle_measure.hpp"  // demo --test circular
 #include "command.hpp"
+#include "figures.hpp"
 #include "gauge_source.hpp"  // demo --instrument: a digital gauge (issue 14)
 #if __has_include("ballbar/report/build.hpp")
 #include "ballbar/report/build.hpp"
@@ -234,8 +235,8 @@ json angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType 
 }
 
 /// `angles` in arcseconds ("d_alpha -46.66\""), each with ± its standard uncertainty from `std` when
-/// given.
-std::string arcsec(const json& angles, const json& std = nullptr) {
+/// given, and flagged (figures.hpp) when more than 5σ from `truth` when given.
+std::string arcsec(const json& angles, const json& std = nullptr, const json& truth = nullptr) {
     std::ostringstream os;
     os.setf(std::ios::fixed);
     os.precision(2);
@@ -243,10 +244,25 @@ std::string arcsec(const json& angles, const json& std = nullptr) {
     bool first = true;
     for (const auto& [k, v] : angles.items()) {
         os << (first ? "" : "  ") << k << " " << ba::rad_to_arcsec(v.get<double>()) << "\"";
-        if (std.is_object() && std.contains(k)) os << " ± " << ba::rad_to_arcsec(std[k].get<double>()) << "\"";
+        if (std.is_object() && std.contains(k)) {
+            os << " ± " << ba::rad_to_arcsec(std[k].get<double>()) << "\"";
+            if (truth.is_object() && truth.contains(k))
+                os << sigma_flag(v.get<double>(), std[k].get<double>(), truth[k].get<double>());
+        }
         first = false;
     }
     return os.str();
+}
+
+/// The largest |measured − true| / std over a location's components, or 0 without uncertainties.
+double location_sigma(const json& l) {
+    double worst = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+        const double s = l["std_mm"][a].get<double>();
+        if (s > 0)
+            worst = std::max(worst, std::abs(l["measured_mm"][a].get<double>() - l["true_mm"][a].get<double>()) / s);
+    }
+    return worst;
 }
 
 int run_demo(const DemoOptions& o, const Globals& globals) {
@@ -427,23 +443,28 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     } else {
         std::printf("\nTotal position errors e = (b - s)actual - (b - s)nominal, µm (SSM exact, %s layout):\n",
                     std::string(ba::to_string(plan.spec.layout)).c_str());
-        std::printf("  test step   measured (x, y, z)              true (x, y, z)                  |diff|\n");
+        std::printf(
+            "  test step   measured (x, y, z)              true (x, y, z)                  |diff|   (!! more than "
+            "5σ from the truth)\n");
         for (const auto& l : out["locations"]) {
             const auto& m = l["measured_mm"];
             const auto& t = l["true_mm"];
             const double d =
                 std::hypot(m[0].get<double>() - t[0].get<double>(), m[1].get<double>() - t[1].get<double>(),
                            m[2].get<double>() - t[2].get<double>());
-            std::printf("  %4d %4d   %8.3f %8.3f %8.3f    %8.3f %8.3f %8.3f    %6.3f\n", l["test"].get<int>(),
+            const double sigma = location_sigma(l);
+            char flag[48] = "";
+            if (sigma > kFlagSigma) std::snprintf(flag, sizeof flag, "   !! %.1fσ", sigma);
+            std::printf("  %4d %4d   %8.3f %8.3f %8.3f    %8.3f %8.3f %8.3f    %6.3f%s\n", l["test"].get<int>(),
                         l["step"].get<int>(), 1e3 * m[0].get<double>(), 1e3 * m[1].get<double>(),
                         1e3 * m[2].get<double>(), 1e3 * t[0].get<double>(), 1e3 * t[1].get<double>(),
-                        1e3 * t[2].get<double>(), 1e3 * d);
+                        1e3 * t[2].get<double>(), 1e3 * d, flag);
         }
         std::printf("\nOrientation errors (exact model), arc-seconds:\n");
         for (const auto& t : out["orientation"])
             std::printf("  test %d (%s): measured %s | true %s\n", t["test"].get<int>(),
-                        t["kind"].get<std::string>().c_str(), arcsec(t["measured_rad"], t["std_rad"]).c_str(),
-                        arcsec(t["true_rad"]).c_str());
+                        t["kind"].get<std::string>().c_str(),
+                        arcsec(t["measured_rad"], t["std_rad"], t["true_rad"]).c_str(), arcsec(t["true_rad"]).c_str());
         std::printf("\nSession %lld stored in %s (%zu samples).\n", static_cast<long long>(id), store.path().c_str(),
                     sum.samples);
         std::printf(

@@ -61,7 +61,10 @@ Inputs load_inputs(const DiscoverOptions& o, const Globals& globals, std::unique
             in.names.push_back(arg);
             continue;
         }
-        if (!store) store = std::make_unique<storage::Store>(resolve_db_path(globals));
+        if (!std::filesystem::exists(arg, ec) && !looks_like_session_key(arg))
+            throw CliError(kExitUsage, "no such file: " + arg);
+        // Sessions are read from an existing database only (a mistyped --db is not a new file).
+        if (!store) store = std::make_unique<storage::Store>(existing_db_path(globals));
         std::int64_t id = 0;
         try {
             id = store->find_session(arg);

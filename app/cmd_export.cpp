@@ -40,8 +40,8 @@ void write_text(const std::string& path, const std::string& text) {
 int run_export(const ExportOptions& o, const Globals& globals) {
     try {
         storage::StoreOptions so;
-        so.recover = false;  // a reader: leave sessions of a running acquisition alone
-        storage::Store store(resolve_db_path(globals), so);
+        so.recover = false;                                   // a reader: leave sessions of a running acquisition alone
+        storage::Store store(existing_db_path(globals), so);  // a reader never creates one
         const auto id = store.find_session(o.session);
         if (o.format == "readings") {
             const auto info = store.session(id);

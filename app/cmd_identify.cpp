@@ -17,6 +17,7 @@
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
+#include "figures.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -184,7 +185,7 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     if (args.json) {
         std::cout << out.dump(2) << '\n';
     } else {
-        std::cout << fit.brief_report();
+        std::cout << fit_report(fit);  // units and uncertainties (figures.hpp)
         if (out.contains("model_id"))
             std::cout << "stored as model " << out["model_id"] << " (" << out["model_name"].get<std::string>()
                       << " version " << out["model_version"] << ")\n";

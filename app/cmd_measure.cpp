@@ -15,11 +15,14 @@
 #include "ballbar/acquisition/bar_check.hpp"
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/session.hpp"
+#include "ballbar/device/emulator.hpp"
+#include "ballbar/device/gauge.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
 #include "gauge_source.hpp"
 #include "interrupt.hpp"
 #include "operators.hpp"
+#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -120,43 +123,97 @@ int dry_run(const MeasureOptions& o) {
     }
 }
 
-int run_measure(const MeasureOptions& o, const Globals& globals) {
-    if (o.dry_run) return dry_run(o);
-    storage::Store store(resolve_db_path(globals));
-    std::int64_t id = 0;
-    acq::Plan plan;
-    std::vector<acq::CapturedPoint> done;
+/// A device URI that cannot name an instrument (and an emulator configuration that cannot be read) is a
+/// bad command line: exit 2, found before anything is stored.
+void check_device_uri(const std::string& uri) {
     try {
-        if (!o.resume.empty()) {
-            id = store.find_session(o.resume);
-            const storage::SessionInfo before = store.session(id);  // why it stopped, shown first
-            std::cout << "Session " << id << " is " << storage::to_string(before.state)
-                      << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
-            plan = load_plan(store, id);
-            done = load_points(store, id, plan);
-            store.resume_session(id);
-        } else {
-            if (o.machine_file.empty()) throw CliError(kExitUsage, "--machine FILE is required (or --resume SESSION)");
-            const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
-            acq::PlanSpec spec = o.plan_file.empty()
-                                     ? acq::default_plan(machine)
-                                     : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
-            if (!o.operator_name.empty()) spec.answers.operator_name = o.operator_name;
-            plan = acq::make_plan(machine, spec);
-            storage::NewSession ns;
-            ns.machine = machine.geometry;
-            ns.source =
-                o.device.rfind("emulator:", 0) == 0 ? storage::SessionSource::emulator : storage::SessionSource::device;
-            ns.operator_name = spec.answers.operator_name;
-            ns.procedure = "ssm-two-step";
-            id = store.create_session(ns);
-            store.start_session(id);
-            store_plan(store, id, plan);
+        if (device::gauge::is_gauge_uri(uri)) {
+            (void)device::gauge::bar_from_uri(uri, {});
+        } else if (const device::DeviceUri d = device::parse_device_uri(uri);
+                   d.scheme == device::DeviceUri::Scheme::Emulator && !d.path.empty()) {
+            (void)device::load_emulator_config(d.path);
         }
+    } catch (const std::invalid_argument& e) {
+        throw CliError(kExitUsage, "--device: " + std::string(e.what()));
+    }
+}
+
+/// Everything a command line can get wrong, checked before a database is opened: a refused command
+/// line leaves no session and creates no database (docs/cli.md).
+void check_command_line(const MeasureOptions& o) {
+    if (o.resume.empty() && o.machine_file.empty())
+        throw CliError(kExitUsage, "--machine FILE is required (or --resume SESSION)");
+    if (o.device.empty()) throw CliError(kExitUsage, "--device URI is required");
+    check_device_uri(o.device);
+    // The terminal operator asks its questions on standard input; a script or a CI job has none to
+    // answer them (they would read end-of-file as "no" and stop the session).
+    if (!o.json && !o.non_interactive && !::isatty(STDIN_FILENO))
+        throw CliError(kExitUsage,
+                       "standard input is not a terminal, so nobody can answer measure's questions: add "
+                       "--non-interactive (the answers of the plan file's \"answers\") or --json (answers as JSON "
+                       "lines on standard input)");
+}
+
+/// The plan of a new session, from --machine and --plan (exit 2 when either is malformed).
+acq::Plan new_plan(const MeasureOptions& o) {
+    try {
+        const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
+        acq::PlanSpec spec = o.plan_file.empty()
+                                 ? acq::default_plan(machine)
+                                 : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
+        if (!o.operator_name.empty()) spec.answers.operator_name = o.operator_name;
+        return acq::make_plan(machine, spec);
     } catch (const acq::PlanError& e) {
         throw CliError(kExitUsage, e.what());
     }
-    if (o.device.empty()) throw CliError(kExitUsage, "--device URI is required");
+}
+
+int run_measure(const MeasureOptions& o, const Globals& globals) {
+    if (o.dry_run) return dry_run(o);
+    check_command_line(o);
+    std::int64_t id = 0;
+    acq::Plan plan;
+    std::vector<acq::CapturedPoint> done;
+    std::unique_ptr<storage::Store> opened;
+    if (!o.resume.empty()) {
+        // A session is continued in an existing database only (a mistyped --db is not a new file).
+        opened = std::make_unique<storage::Store>(existing_db_path(globals));
+        try {
+            id = opened->find_session(o.resume);
+        } catch (const storage::StorageError& e) {
+            throw cli_error(e);  // no such session: exit 2, as `sessions show` says it
+        }
+        const storage::SessionInfo before = opened->session(id);  // why it stopped, shown first
+        std::cout << "Session " << id << " is " << storage::to_string(before.state)
+                  << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
+        try {
+            plan = load_plan(*opened, id);
+        } catch (const acq::PlanError& e) {
+            throw CliError(kExitUsage, e.what());
+        }
+        done = load_points(*opened, id, plan);
+        try {
+            opened->resume_session(id);
+        } catch (const storage::StorageError& e) {
+            // A completed or aborted session, or one another process is measuring: the request
+            // contradicts the session's state, a bad command line (exit 2) that changes nothing.
+            if (e.kind() != storage::StorageError::Kind::invalid) throw;
+            throw CliError(kExitUsage, e.what());
+        }
+    } else {
+        plan = new_plan(o);
+        opened = std::make_unique<storage::Store>(resolve_db_path(globals));
+        storage::NewSession ns;
+        ns.machine = plan.machine.geometry;
+        ns.source =
+            o.device.rfind("emulator:", 0) == 0 ? storage::SessionSource::emulator : storage::SessionSource::device;
+        ns.operator_name = plan.spec.answers.operator_name;
+        ns.procedure = "ssm-two-step";
+        id = opened->create_session(ns);
+        opened->start_session(id);
+        store_plan(*opened, id, plan);
+    }
+    storage::Store& store = *opened;
     std::cout << "Session " << id << (done.empty() ? "" : " (resumed after " + std::to_string(done.size()) + " points)")
               << ": " << ba::to_string(plan.machine.geometry.type) << ", " << plan.test_count() << " tests, "
               << plan.points.size() << " points.\n";
@@ -225,8 +282,10 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         }
         return kExitOk;
     }
+    // Not interrupted: a point that failed its checks with the answer "abort" (the plan's in CI), results
+    // not accepted, a set-up not confirmed. The measurement failed (exit 1); 3 is only an interruption.
     if (sum.final_state == acq::State::Aborted)
-        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " aborted: " + sum.reason);
+        throw CliError(kExitFailure, "session " + std::to_string(id) + " aborted: " + sum.reason);
     throw CliError(kExitFailure, "session " + std::to_string(id) + " failed: " + sum.reason);
 }
 
@@ -235,8 +294,12 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
 BALLBAR_COMMAND(measure) {
     auto* sub = root.add_subcommand("measure", "Guided two-step SSM measurement (RRTTT, TTTRR, RTTTR)");
     auto o = std::make_shared<MeasureOptions>();
-    sub->add_option("--device", o->device, "Instrument URI (serial:PATH, tcp:HOST:PORT, usb:VID:PID, emulator:CONFIG)");
-    sub->add_option("--machine", o->machine_file, "Machine file (ballbar-machine/1 JSON)");
+    // Required, but not always: CLI11's ->required() cannot say "unless --resume", so the help says it.
+    sub->add_option("--device", o->device,
+                    "REQUIRED (not with --dry-run): instrument URI (serial:PATH, tcp:HOST:PORT, usb:VID:PID, "
+                    "hid:VID:PID, emulator:CONFIG, or a gauge's: sylvac:PATH, ...)");
+    sub->add_option("--machine", o->machine_file,
+                    "REQUIRED (not with --resume): machine file (ballbar-machine/1 JSON)");
     sub->add_option("--plan", o->plan_file, "Plan file (ballbar-plan/1 JSON); default: four tests at one socket");
     sub->add_option("--operator", o->operator_name, "Operator name stored with the session");
     sub->add_option("--resume", o->resume, "Continue an interrupted session (id or uuid prefix)");

@@ -33,7 +33,7 @@ int run_report(const ReportOptions& o, const Globals& globals) {
     so.read_only = true;  // a report never changes the database
     so.recover = false;
     std::unique_ptr<storage::Store> store;
-    const std::string db = resolve_db_path(globals);
+    const std::string db = existing_db_path(globals);  // a reader never creates one
     try {
         store = std::make_unique<storage::Store>(db, so);
     } catch (const storage::StorageError& e) {

@@ -6,10 +6,12 @@
 #include <filesystem>
 #include <iostream>
 
+#include "ballbar/storage/imports.hpp"
 #include "ballbar/storage/session_clock.hpp"
 #include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
+#include "figures.hpp"
 #include "storage_errors.hpp"
 
 namespace ballbar::app {
@@ -23,8 +25,8 @@ struct SessionsOptions {
 
 storage::Store open_reader(const Globals& globals) {
     storage::StoreOptions so;
-    so.recover = false;  // listing must not touch a running acquisition's session
-    return storage::Store(resolve_db_path(globals), so);
+    so.recover = false;                                    // listing must not touch a running acquisition's session
+    return storage::Store(existing_db_path(globals), so);  // a reader never creates one
 }
 
 std::string machine_label(const analysis::MachineGeometry& m) {
@@ -121,6 +123,9 @@ int show_session(const SessionsOptions& o, const Globals& globals) {
         std::cout << "  instrument  - (not recorded)\n";
     }
     if (!s.notes.empty()) std::cout << "  notes       " << s.notes << '\n';
+    if (const auto imp = storage::import_of(store, id))
+        std::cout << "  imported    from " << imp->file_name << " (" << imp->bytes << " bytes, SHA-256 "
+                  << imp->content_sha256 << ") at " << imp->imported_at << '\n';
     std::cout << "  samples     " << s.sample_count;
     if (s.sample_count > 0) {
         const storage::SessionClock clock(store, id);
@@ -169,6 +174,8 @@ int show_session(const SessionsOptions& o, const Globals& globals) {
         if (r.model_id) std::cout << "  model " << *r.model_id;
         if (!r.producer.empty()) std::cout << "  by " << r.producer;
         std::cout << '\n';
+        for (const auto& line : result_lines(r.kind, r.payload_json, s.machine.type))
+            std::cout << "        " << line << '\n';
     }
     return kExitOk;
 }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -15,6 +16,7 @@
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/analysis/plan_identification.hpp"
 #include "ballbar/device/sim_machine.hpp"
+#include "figures.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -229,12 +231,16 @@ int run_compensation_demo(const CompensationDemoOptions& opt, std::ostream& out,
         j["identified"] = nlohmann::json::array();
         for (const auto& e : fit.estimates) {
             if (!e.param) continue;
-            j["identified"].push_back({{"name", e.name},
-                                       {"unit", std::string(to_string(param_info(*e.param).unit))},
-                                       {"estimate", e.estimate},
-                                       {"true", truth[*e.param]},
-                                       {"std", e.std},
-                                       {"observable", e.observable}});
+            j["identified"].push_back(
+                {{"name", e.name},
+                 {"unit", std::string(to_string(param_info(*e.param).unit))},
+                 {"estimate", e.estimate},
+                 {"true", truth[*e.param]},
+                 {"std", e.std},
+                 {"observable", e.observable},
+                 // |estimate − true| / std; over 5 the text output flags it
+                 {"sigma_from_true", e.std > 0 ? nlohmann::json(std::abs(e.estimate - truth[*e.param]) / e.std)
+                                               : nlohmann::json(nullptr)}});
         }
         j["unobservable"] = nlohmann::json::array();
         for (const auto& s : plan.unreachable) j["unobservable"].push_back(s);
@@ -252,11 +258,17 @@ int run_compensation_demo(const CompensationDemoOptions& opt, std::ostream& out,
             << "Plan: " << plan.locations.size() << " SSM locations, " << readings.readings.size()
             << " readings, bar noise " << opt.noise_um << " um\n";
         for (const auto& s : plan.unreachable) out << "  not identifiable: " << s << '\n';
-        out << "Identification: " << fit.brief_report();
-        out << "Identified vs true:\n";
+        out << "Identification: " << fit_report(fit);
+        out << "Identified vs true (!! marks an estimate more than 5σ from the truth):\n";
         for (const auto& e : fit.estimates) {
             if (!e.param) continue;
-            out << "  " << e.name << ": " << e.estimate << " +- " << e.std << "  (true " << truth[*e.param] << ")\n";
+            const ScreenUnit u = screen_unit(param_info(*e.param).unit);
+            char line[200];
+            std::snprintf(line, sizeof line, "  %-6s %26s  (true %s)%s\n", e.name.c_str(),
+                          with_uncertainty(e.estimate * u.factor, e.std * u.factor, u.symbol).c_str(),
+                          with_uncertainty(truth[*e.param] * u.factor, 0, u.symbol).c_str(),
+                          sigma_flag(e.estimate, e.std, truth[*e.param]).c_str());
+            out << line;
         }
         out << "Test path: " << path.size() << " blocks, " << (opt.first_order ? "first-order" : "exact")
             << " compensation\n";

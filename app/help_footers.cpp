@@ -19,7 +19,8 @@ const std::map<std::string, std::string>& examples() {
          "  ballbar circle analyze 4 --controller linuxcnc     # the measured backlash as INI settings\n"},
         {"compensate",
          "  ballbar compensate --model tttrr --program part.nc --out part-comp.nc\n"
-         "  ballbar compensate --model model.json --program part.ngc --out - --exact > comp.ngc\n"},
+         "  ballbar compensate --model model.json --program part.ngc --out - --exact > comp.ngc\n"
+         "  ballbar compensate --model 3 --program part.nc --out - --json > comp.nc 2> report.json\n"},
         {"completion", "  ballbar completion bash > ~/.local/share/bash-completion/completions/ballbar\n"},
         {"demo",
          "  ballbar demo                                 # TTTRR, the guided procedure on the emulator\n"
@@ -36,11 +37,14 @@ const std::map<std::string, std::string>& examples() {
          "  ballbar export 3 --format readings --out s3.csv\n"
          "  ballbar export 3 --format json --out s3.json\n"},
         {"identify", "  ballbar identify 3 4 --json\n  ballbar identify readings.csv --params all --name mill-1\n"},
-        {"import", "  ballbar import s3.csv\n"},
+        {"import",
+         "  ballbar import s3.csv\n"
+         "  ballbar import s3.csv --allow-duplicate       # content imported before: refused without it\n"},
         {"measure",
          "  ballbar measure --device serial:/dev/ttyACM0 --machine machine.json\n"
          "  ballbar measure --device serial:/dev/pts/5 --machine machine.json --plan plan.json\n"
-         "  ballbar measure --resume 7 --device serial:/dev/ttyACM0\n"},
+         "  ballbar measure --resume 7 --device serial:/dev/ttyACM0\n"
+         "  ballbar measure --non-interactive --device serial:/dev/ttyACM0 --machine m.json --plan ci.json  # CI\n"},
         {"monitor",
          "  ballbar monitor --device serial:/dev/ttyACM0 --seconds 2 --json\n"
          "  ballbar monitor --device sylvac:/dev/ttyUSB0\n"},
@@ -55,8 +59,9 @@ const std::map<std::string, std::string>& examples() {
 constexpr const char* kExitCodes =
     "Exit codes:\n"
     "  0  success\n"
-    "  1  the operation failed (instrument lost, database error, measurement refused)\n"
-    "  2  bad command line or malformed input (the message names the option, field or line)\n"
+    "  1  the operation failed (instrument lost, database error, measurement aborted by its checks)\n"
+    "  2  bad command line or malformed input (the message names the option, field or line); no such\n"
+    "     session or model; nothing is stored\n"
     "  3  interrupted (Ctrl-C); what was measured is stored and can be resumed";
 
 }  // namespace

@@ -152,6 +152,20 @@ CREATE VIEW sample_instruments AS
     (SELECT max(h.first_seq) FROM sample_segments h WHERE h.session_id = s.session_id AND h.first_seq <= s.seq);
 )sql";
 
-inline constexpr std::array<std::string_view, 4> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3, kMigrationV4};
+// v5: the file an imported session came from: the SHA-256 of its bytes, its name and size, so that the
+// same content imported again is recognised (imports.hpp). Sessions imported before have no row.
+inline constexpr std::string_view kMigrationV5 = R"sql(
+CREATE TABLE imports (
+  session_id INTEGER PRIMARY KEY REFERENCES sessions(id),
+  content_sha256 TEXT NOT NULL CHECK (length(content_sha256) = 64),
+  file_name TEXT NOT NULL DEFAULT '',
+  bytes INTEGER NOT NULL CHECK (bytes >= 0),
+  imported_at TEXT NOT NULL
+);
+CREATE INDEX imports_by_content ON imports(content_sha256);
+)sql";
+
+inline constexpr std::array<std::string_view, 5> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3, kMigrationV4,
+                                                                kMigrationV5};
 
 }  // namespace ballbar::storage::detail

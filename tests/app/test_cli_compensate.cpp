@@ -230,6 +230,15 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
         EXPECT_EQ(to_stdout.out.find("compensated 3 of"), std::string::npos) << dest;
         EXPECT_NE(to_stdout.err.find("compensated 3 of"), std::string::npos) << dest << ": " << to_stdout.err;
     }
+    // With --json too: the program alone on stdout, the JSON report alone on stderr (docs/cli.md).
+    const CliRun json_out = run(d, compensate + "- --json");
+    EXPECT_EQ(json_out.code, 0) << json_out.err;
+    EXPECT_EQ(json_out.out.rfind("%\nO0001", 0), 0u) << json_out.out;
+    EXPECT_EQ(json_out.out.find('{'), std::string::npos) << "no JSON in the program: " << json_out.out;
+    const auto report = nlohmann::json::parse(json_out.err, nullptr, false);
+    ASSERT_FALSE(report.is_discarded()) << "stderr is the JSON report and nothing else: " << json_out.err;
+    EXPECT_EQ(report.value("compensated", -1), 3) << json_out.err;
+    EXPECT_EQ(report.value("out", ""), "-");
     EXPECT_TRUE(fs::is_symlink("/dev/stdout"));
 }
 

@@ -202,6 +202,45 @@ TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {
     EXPECT_EQ(r.out.find("\033["), std::string::npos) << "no colour when stdout is not a terminal";
 }
 
+TEST(Demo, SessionsShowGivesEachResultsValuesWithUnits) {
+    const auto db = temp_db("show.db");
+    const DemoRun r = run("--db " + db.string() + " demo --json");
+    ASSERT_EQ(r.status, 0) << r.out;
+    const auto id = nlohmann::json::parse(r.out)["session"].get<long>();
+    const DemoRun shown = run("--db " + db.string() + " sessions show " + std::to_string(id));
+    ASSERT_EQ(shown.status, 0) << shown.out;
+    // Each SSM location's error with its uncertainty, each test's orientation errors in arc-seconds.
+    EXPECT_NE(shown.out.find("test 1 step 1: e ("), std::string::npos) << shown.out;
+    EXPECT_NE(shown.out.find(") ± ("), std::string::npos) << shown.out;
+    EXPECT_NE(shown.out.find(" µm, ΔV ("), std::string::npos) << shown.out;
+    EXPECT_NE(shown.out.find("test 1 (BothAxes): Δα "), std::string::npos) << shown.out;
+    EXPECT_NE(shown.out.find("″ Δγ "), std::string::npos) << shown.out;
+}
+
+TEST(Demo, CompensationFlagsEstimatesMoreThanFiveSigmaFromTheTruth) {
+    const auto db = temp_db("flags.db");
+    const DemoRun j = run("--db " + db.string() + " demo --compensate --json");
+    ASSERT_EQ(j.status, 0) << j.out;
+    const DemoRun t = run("--db " + db.string() + " demo --compensate");
+    ASSERT_EQ(t.status, 0) << t.out;
+    const auto identified = nlohmann::json::parse(j.out)["compensation"]["identified"];
+    ASSERT_GT(identified.size(), 5u);
+    for (const auto& p : identified) {
+        const std::string name = p["name"];
+        const auto at = t.out.find("\n  " + name + " ", t.out.find("Identified vs true"));
+        ASSERT_NE(at, std::string::npos) << name << "\n" << t.out;
+        const std::string line = t.out.substr(at + 1, t.out.find('\n', at + 1) - at - 1);
+        EXPECT_NE(line.find(" ± "), std::string::npos) << line;
+        EXPECT_NE(line.find("(true "), std::string::npos) << line;
+        const bool off = p["sigma_from_true"].is_number() && p["sigma_from_true"].get<double>() > 5.0;
+        EXPECT_EQ(line.find("σ from the true value") != std::string::npos, off) << line;
+    }
+    // Units: no bare numbers in the identification's estimates.
+    EXPECT_NE(t.out.find(" µm "), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find(" µrad "), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find(" µm/m "), std::string::npos) << t.out;
+}
+
 TEST(Demo, StoresTheProcedureStepsAsTheAuditTrail) {
     const auto db = temp_db("audit.db");
     const DemoRun r = run("--db " + db.string() + " demo --json");

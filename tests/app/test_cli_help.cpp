@@ -37,6 +37,14 @@ TEST(CliHelp, EverySubcommandHasExamplesAndExitCodes) {
     EXPECT_NE(top.out.find("Exit codes:"), std::string::npos);
 }
 
+TEST(CliHelp, MeasureMarksItsRequiredOptions) {
+    TempDir dir;
+    const CliRun r = run(dir, "measure --help");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("REQUIRED (not with --dry-run): instrument URI"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("REQUIRED (not with --resume): machine file"), std::string::npos) << r.out;
+}
+
 TEST(CliHelp, BashCompletionIsValidAndKnowsEveryCommand) {
     TempDir dir;
     const CliRun r = run(dir, "completion bash");

@@ -228,9 +228,10 @@ TEST(CliMeasure, ATwoSocketPlanCompletesThroughTheEmulatorOnAPty) {
 TEST(CliMeasure, ADefaultPlanWithTheEmulatorsDefaultBarIsRefusedBeforeAnyQuestion) {
     const fs::path dir = temp_dir();
     std::string out;
-    const int code = run("--db " + (dir / "mismatch.db").string() + " measure --device emulator: --machine " +
-                             (kData / "tttrr.json").string(),
-                         &out);
+    const int code =
+        run("--db " + (dir / "mismatch.db").string() + " measure --non-interactive --device emulator: --machine " +
+                (kData / "tttrr.json").string(),
+            &out);
     EXPECT_EQ(code, 1) << out;
     EXPECT_NE(out.find("\"bar_length_mm\": 150 in a plan file"), std::string::npos) << "names the fix: " << out;
     EXPECT_EQ(out.find("calibrator"), std::string::npos) << "nothing asked first: " << out;
@@ -285,13 +286,43 @@ TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
     EXPECT_NE(out.find("captured 5/6"), std::string::npos) << out;
     EXPECT_NE(out.find("completed"), std::string::npos) << out;
     EXPECT_EQ(out.find("\033["), std::string::npos) << "no colour in a pipe";
-    // Nothing left to resume: a completed session is refused.
+    // Nothing left to resume: a completed session is refused as a bad command line (exit 2).
     std::regex id_re("Session ([0-9]+)");
     std::smatch m;
     ASSERT_TRUE(std::regex_search(out, m, id_re)) << out;
-    EXPECT_NE(run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
-                  " --resume " + m[1].str()),
-              0);
+    std::string refused;
+    EXPECT_EQ(run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
+                      " --resume " + m[1].str(),
+                  &refused),
+              2)
+        << refused;
+}
+
+TEST(CliMeasure, AQualityAbortInCiIsAFailureExit1NotAnInterruption) {
+    // The plan's capture asks for a 0.05 µm standard deviation of a 0.1 µm-noise bar: every point fails
+    // its checks, and the plan's answer to a failed point is "abort" (as in CI).
+    const fs::path dir = temp_dir();
+    fs::remove(dir / "q.nc");
+    const fs::path cfg = emulator_config(dir, dir / "q.nc");
+    std::string plan = slurp(kData / "tttrr-quick.plan.json");
+    const std::string loose = "\"max_std_um\": 2";
+    ASSERT_NE(plan.find(loose), std::string::npos);
+    plan.replace(plan.find(loose), loose.size(), "\"max_std_um\": 0.05, \"retries\": 0");
+    const fs::path plan_file = dir / "strict.plan.json";
+    std::ofstream(plan_file) << plan;
+    const fs::path db = dir / "quality.db";
+    fs::remove(db);
+    std::string out;
+    const int code = run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
+                             " --machine " + (kData / "tttrr.json").string() + " --plan " + plan_file.string() +
+                             " --program " + (dir / "q.nc").string(),
+                         &out);
+    EXPECT_EQ(code, 1) << "3 is only an interruption:\n" << out;
+    EXPECT_NE(out.find("ballbar: error: session 1 aborted: "), std::string::npos) << out;
+    EXPECT_NE(out.find("failed"), std::string::npos) << out;
+    std::string shown;
+    ASSERT_EQ(run("--db " + db.string() + " sessions show 1 --json", &shown), 0) << shown;
+    EXPECT_EQ(nlohmann::json::parse(shown).at("session").at("state"), "aborted") << shown;
 }
 
 /// Starts `measure --non-interactive` on the emulator and reads its output until three of the six

@@ -96,6 +96,51 @@ TEST(CliStorage, SessionsListsAndShows) {
     EXPECT_EQ(run(d, "export 99 --format json --out -").code, 2);
 }
 
+TEST(CliStorage, ImportingTheSameContentAgainIsRefusedNamingTheSession) {
+    TempDir d;
+    const std::string original = kData + "rrttt_minimal.csv";
+    const CliRun first = run(d, "import '" + original + "' --json");
+    ASSERT_EQ(first.code, 0) << first.err;
+    const json j = json::parse(first.out);
+    // The stored hash is the file's SHA-256 as coreutils computes it.
+    ASSERT_EQ(std::system(("sha256sum '" + original + "' > '" + d.file("sum") + "'").c_str()), 0);
+    EXPECT_EQ(j.value("sha256", ""), slurp(d.path / "sum").substr(0, 64));
+    EXPECT_TRUE(j["duplicate_of"].empty());
+
+    // The same bytes under another name: refused, exit 2, naming session 1 and its file; nothing stored.
+    fs::copy_file(original, d.path / "renamed.csv");
+    const CliRun again = run(d, "import '" + d.file("renamed.csv") + "'");
+    EXPECT_EQ(again.code, 2) << again.err;
+    EXPECT_EQ(again.err.rfind("ballbar: error: ", 0), 0u) << again.err;
+    EXPECT_NE(again.err.find("already imported as session 1 (imported from " + original), std::string::npos)
+        << again.err;
+    EXPECT_NE(again.err.find("--allow-duplicate"), std::string::npos) << again.err;
+    EXPECT_EQ(json::parse(run(d, "sessions --json").out).size(), 1u);
+
+    // One byte more is other content.
+    fs::copy_file(original, d.path / "edited.csv", fs::copy_options::overwrite_existing);
+    std::ofstream(d.path / "edited.csv", std::ios::app) << "\n";
+    EXPECT_EQ(run(d, "import '" + d.file("edited.csv") + "'").code, 0);
+
+    // --allow-duplicate imports it again, says which session it repeats, and records it too.
+    const CliRun allowed = run(d, "import '" + original + "' --allow-duplicate --json");
+    ASSERT_EQ(allowed.code, 0) << allowed.err;
+    EXPECT_NE(allowed.err.find("ballbar: warning: "), std::string::npos) << allowed.err;
+    EXPECT_NE(allowed.err.find("the same content as session 1"), std::string::npos) << allowed.err;
+    const json k = json::parse(allowed.out);
+    EXPECT_EQ(k["session"], 3);
+    EXPECT_EQ(k["duplicate_of"], json::array({1}));
+    const CliRun third = run(d, "import '" + original + "'");
+    EXPECT_EQ(third.code, 2);
+    EXPECT_NE(third.err.find("session 1 (imported from " + original + " at "), std::string::npos) << third.err;
+    EXPECT_NE(third.err.find(" and 1 more"), std::string::npos) << third.err;
+
+    // sessions show says where a session came from.
+    const CliRun shown = run(d, "sessions show 1");
+    EXPECT_NE(shown.out.find("imported    from " + original), std::string::npos) << shown.out;
+    EXPECT_NE(shown.out.find("SHA-256 " + j.value("sha256", "")), std::string::npos) << shown.out;
+}
+
 TEST(CliStorage, NominalDisagreementIsReported) {
     TempDir d;
     const CliRun r = run(d, "import '" + kData + "rtttr_nominal_mismatch.csv'");

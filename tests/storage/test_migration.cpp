@@ -3,6 +3,8 @@
 // version is migrated in place, loses nothing and keeps working.
 #include <gtest/gtest.h>
 
+#include "ballbar/storage/imports.hpp"
+#include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/sqlite.hpp"
 #include "ballbar/storage/store.hpp"
 #include "schema.hpp"  // storage/src: the migrations as the store applies them
@@ -187,6 +189,47 @@ TEST(Migration, V1OpenedReadOnlyIsReadAsItIsAndNotChanged) {
     }
     Database db(path);
     EXPECT_EQ(db.query_int("PRAGMA user_version"), 1) << "a read-only open migrates nothing";
+}
+
+// A database exactly as schema v4 left it: one imported session (v4 recorded no file hash).
+void make_v4(const std::string& path) {
+    Database db(path);
+    db.exec("BEGIN");
+    for (int v = 0; v < 4; ++v) db.exec(detail::kMigrations[static_cast<std::size_t>(v)]);
+    db.exec("PRAGMA user_version = 4");
+    db.exec("PRAGMA application_id = " + std::to_string(Store::kApplicationId));
+    analysis::MachineGeometry m;
+    m.type = analysis::MachineType::TTTRR;
+    auto st = db.prepare("INSERT INTO machines(id, name, type, geometry_json) VALUES (1, 'm', 'TTTRR', ?)");
+    st.bind(1, machine_to_json(m)).run();
+    db.exec(R"sql(
+INSERT INTO sessions(id, uuid, machine_id, source, state, procedure, started_at) VALUES
+  (1, '44444444-4444-4444-8444-444444444441', 1, 'imported', 'completed', 'import', '2026-11-01T10:00:00.000Z');
+)sql");
+    db.exec("COMMIT");
+}
+
+TEST(Migration, V4GetsTheImportsTableAndItsImportedSessionNoRecordedFile) {
+    TempDir dir;
+    const std::string path = dir.file("v4.db");
+    make_v4(path);
+    {
+        StoreOptions ro;
+        ro.read_only = true;
+        Store store(path, ro);
+        EXPECT_EQ(store.schema_version(), 4);
+        EXPECT_FALSE(import_of(store, 1)) << "read-only below v5: nothing to read, no error";
+        EXPECT_TRUE(imports_of_content(store, sha256_hex("x")).empty());
+    }
+    Store store(path);
+    EXPECT_EQ(store.db().query_int("PRAGMA user_version"), Store::kSchemaVersion);
+    EXPECT_EQ(store.integrity_check(), "ok");
+    EXPECT_EQ(store.session(1).source, SessionSource::imported) << "the session is kept";
+    EXPECT_FALSE(import_of(store, 1)) << "imported before v5: its file is not known";
+    record_import(store, 1, sha256_hex("readings"), "a.readings", 8);
+    ASSERT_EQ(imports_of_content(store, sha256_hex("readings")).size(), 1u);
+    EXPECT_EQ(import_of(store, 1)->file_name, "a.readings");
+    EXPECT_THROW(record_import(store, 1, "not a hash", "b.readings", 1), StorageError) << "the CHECK holds";
 }
 
 TEST(Migration, ProcedureStepsStayOutOfTheLifecycle) {

@@ -167,7 +167,7 @@ struct StoreOptions {
 
 class Store {
   public:
-    static constexpr int kSchemaVersion = 4;
+    static constexpr int kSchemaVersion = 5;
     static constexpr std::int64_t kApplicationId = 0x42424152;  // "BBAR"
 
     /// Opens or creates the database at `path` and migrates it to kSchemaVersion. Throws StorageError:

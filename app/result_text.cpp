@@ -1,0 +1,184 @@
+// SPDX-License-Identifier: MIT
+// What `sessions show` says of each stored result: its values, with units and uncertainties
+// (figures.hpp). The payloads are the ones app/ stores (acquisition_adapters.cpp, cmd_identify.cpp,
+// cmd_discover.cpp, cmd_demo.cpp, gauge_source.cpp); anything else shows its numbers by name.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "ballbar/analysis/error_params.hpp"
+#include "figures.hpp"
+
+namespace ballbar::app {
+namespace {
+
+namespace ba = ballbar::analysis;
+using nlohmann::json;
+
+double num(const json& j, const char* key, double fallback = 0) {
+    return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
+}
+
+bool vec3(const json& j, const char* key) {
+    return j.contains(key) && j[key].is_array() && j[key].size() == 3 && j[key][0].is_number() &&
+           j[key][1].is_number() && j[key][2].is_number();
+}
+
+/// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm" from mm: two significant digits of the smallest
+/// uncertainty fix the decimals (2 to 4).
+std::string vec_um(const json& v, const json* std) {
+    int decimals = 2;
+    if (std) {
+        double smallest = 0;
+        for (std::size_t a = 0; a < 3; ++a) {
+            const double s = (*std)[a].get<double>() * 1e3;
+            if (s > 0 && (smallest == 0 || s < smallest)) smallest = s;
+        }
+        if (smallest > 0) decimals = std::clamp(1 - static_cast<int>(std::floor(std::log10(smallest))), 2, 4);
+    }
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "(%.*f, %.*f, %.*f)", decimals, v[0].get<double>() * 1e3, decimals,
+                  v[1].get<double>() * 1e3, decimals, v[2].get<double>() * 1e3);
+    std::string out = buf;
+    if (std) {
+        std::snprintf(buf, sizeof buf, " ± (%.*f, %.*f, %.*f)", decimals, (*std)[0].get<double>() * 1e3, decimals,
+                      (*std)[1].get<double>() * 1e3, decimals, (*std)[2].get<double>() * 1e3);
+        out += buf;
+    }
+    return out + " µm";
+}
+
+std::vector<std::string> ssm_lines(const json& j) {
+    char buf[96];
+    std::string line =
+        "test " + std::to_string(j.value("test", -1) + 1) + " step " + std::to_string(j.value("step", 0));
+    if (vec3(j, "e_exact_mm")) line += ": e " + vec_um(j["e_exact_mm"], vec3(j, "e_std_mm") ? &j["e_std_mm"] : nullptr);
+    if (vec3(j, "dV_mm")) line += ", ΔV " + vec_um(j["dV_mm"], nullptr);
+    std::snprintf(buf, sizeof buf, ", condition %.3g, %d points", num(j, "condition_number"), j.value("n", 0));
+    return {line + buf};
+}
+
+std::vector<std::string> orientation_lines(const json& j, ba::MachineType machine) {
+    const std::string kind = j.value("kind", "");
+    std::string line = "test " + std::to_string(j.value("test", -1) + 1) + " (" + kind + "):";
+    if (!j.contains("exact") || !j["exact"].is_object())
+        return {line + " orientation singular" + (j.contains("singular") ? ": " + j.value("singular", "") : "")};
+    const bool rtttr = machine == ba::MachineType::RTTTR;
+    std::vector<std::pair<const char*, const char*>> angles;  // (key, symbol) the test measures
+    if (!rtttr || kind == "TableAlpha") angles.push_back({"d_alpha_rad", "Δα"});
+    if (machine == ba::MachineType::RRTTT || (rtttr && kind == "SpindleBeta")) angles.push_back({"d_beta_rad", "Δβ"});
+    if (machine == ba::MachineType::TTTRR) angles.push_back({"d_gamma_rad", "Δγ"});
+    const json& e = j["exact"];
+    const json* s = j.contains("std") && j["std"].is_object() ? &j["std"] : nullptr;
+    for (const auto& [key, symbol] : angles) {
+        if (!e.contains(key) || !e[key].is_number()) continue;
+        const double sd = s && (*s).contains(key) && (*s)[key].is_number() ? (*s)[key].get<double>() : 0.0;
+        line += std::string(" ") + symbol + " " +
+                with_uncertainty(ba::rad_to_arcsec(e[key].get<double>()), ba::rad_to_arcsec(sd), "″");
+    }
+    return {line};
+}
+
+std::vector<std::string> identification_lines(const json& j) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%s, %d readings, residual RMS %.3f µm",
+                  j.value("converged", false) ? "converged" : "NOT converged", j.value("readings", 0),
+                  num(j, "residual_rms_um"));
+    std::vector<std::string> out{buf};
+    if (!j.contains("estimates") || !j["estimates"].is_array()) return out;
+    std::string line;
+    for (const auto& e : j["estimates"]) {
+        if (!e.is_object() || !e.value("observable", false)) continue;
+        const std::string name = e.value("name", "?");
+        ScreenUnit u{1e3, "µm"};  // socket offsets: mm
+        if (const auto p = ba::parse_param(name)) u = screen_unit(ba::param_info(*p).unit);
+        const std::string item =
+            name + " " + with_uncertainty(num(e, "estimate") * u.factor, num(e, "std") * u.factor, u.symbol);
+        if (!line.empty() && line.size() + item.size() > 100) {
+            out.push_back(line);
+            line.clear();
+        }
+        line += (line.empty() ? "" : ", ") + item;
+    }
+    if (!line.empty()) out.push_back(line);
+    return out;
+}
+
+std::vector<std::string> discovery_lines(const json& j) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "residual RMS %.3f µm -> %.3f µm", num(j, "rms_initial_um"), num(j, "rms_final_um"));
+    std::vector<std::string> out{buf};
+    if (j.contains("model") && j["model"].is_object())
+        out.back() +=
+            ", model " + j["model"].value("name", "?") + " version " + std::to_string(j["model"].value("version", 0));
+    if (!j.contains("steps") || !j["steps"].is_array()) return out;
+    for (const auto& st : j["steps"]) {
+        if (!st.is_object() || st.value("kind", "") != "library") continue;
+        const std::string effect = st.value("effect", "?");
+        ScreenUnit u{1, st.value("unit", "")};
+        if (const auto p = ba::parse_param(st.value("iso", ""))) u = screen_unit(ba::param_info(*p).unit);
+        out.push_back(effect + " " +
+                      with_uncertainty(num(st, "estimate") * u.factor, num(st, "stderr") * u.factor, u.symbol) +
+                      (st.value("accepted", true) ? "" : " (withdrawn)"));
+    }
+    return out;
+}
+
+std::vector<std::string> compensation_lines(const json& j) {
+    std::vector<std::string> out;
+    if (j.contains("axes") && j["axes"].is_array()) {
+        std::string line = "RMS error before -> after:";
+        for (const auto& a : j["axes"]) {
+            char buf[96];
+            std::snprintf(buf, sizeof buf, " %s %.3f -> %.3f %s", a.value("axis", "?").c_str(), num(a, "before"),
+                          num(a, "after"), a.value("unit", "").c_str());
+            line += buf;
+        }
+        out.push_back(line);
+    }
+    return out;
+}
+
+std::vector<std::string> instrument_lines(const json& j) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%s %s, resolution %.4g µm, %.1f readings/s measured", j.value("maker", "").c_str(),
+                  j.value("model", j.value("kind", "")).c_str(), num(j, "resolution_mm") * 1e3,
+                  num(j, "reading_rate_hz"));
+    return {buf};
+}
+
+/// Top-level numbers under their own names (the names carry the units), at most eight.
+std::vector<std::string> generic_lines(const json& j) {
+    std::string line;
+    int shown = 0;
+    for (const auto& [key, v] : j.items()) {
+        if (!v.is_number() || ++shown > 8) continue;
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.6g", v.get<double>());
+        line += (line.empty() ? "" : ", ") + key + " " + buf;
+    }
+    if (line.empty()) return {};
+    return {line};
+}
+
+}  // namespace
+
+std::vector<std::string> result_lines(std::string_view kind, std::string_view payload_json, ba::MachineType machine) {
+    const json j = json::parse(payload_json, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) return {};
+    try {
+        if (kind == "ssm") return ssm_lines(j);
+        if (kind == "orientation") return orientation_lines(j, machine);
+        if (kind == "identification") return identification_lines(j);
+        if (kind == "discovery") return discovery_lines(j);
+        if (kind == "compensation") return compensation_lines(j);
+        if (kind == "instrument") return instrument_lines(j);
+        if (kind == "acquisition.plan") return {};  // the plan: `sessions show --json`
+        return generic_lines(j);
+    } catch (const json::exception&) {
+        return {"(values not readable: " + std::string(kind) + " payload of another shape)"};
+    }
+}
+
+}  // namespace ballbar::app
