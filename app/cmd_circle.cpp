@@ -9,10 +9,12 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/analysis/circular.hpp"
+#include "ballbar/analysis/limits.hpp"
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/storage/trace_file.hpp"
@@ -32,9 +34,9 @@ struct PlanOptions {
     std::vector<double> centre_mm{0.0, 0.0, 0.0};
     double feed_mm_min = 1000.0;
     double feed_in_mm = 1.5;
-    double overshoot_deg = -1.0;  // <0: 45 for a full circle, 20 for a partial arc
+    std::optional<double> overshoot_deg;  // default: 45 for a full circle, 20 for a partial arc
     double arc_deg = 360.0;
-    double start_deg = 1e9;  // default: 0 (full) or −overshoot (partial)
+    std::optional<double> start_deg;  // default: 0 (full) or −overshoot (partial)
     std::string directions = "both";
     std::string dialect;
     std::string machine_file;
@@ -56,8 +58,8 @@ circ::TestSpec plan_test(const PlanOptions& o) {
     t.feed_mm_min = o.feed_mm_min;
     t.feed_in_mm = o.feed_in_mm;
     const bool full = o.arc_deg >= 360.0;
-    const double over = o.overshoot_deg >= 0.0 ? o.overshoot_deg : full ? 45.0 : 20.0;
-    const double start = o.start_deg < 1e8 ? o.start_deg : full ? 0.0 : -over;
+    const double over = o.overshoot_deg ? *o.overshoot_deg : full ? 45.0 : 20.0;  // (checked by validate())
+    const double start = o.start_deg ? *o.start_deg : full ? 0.0 : -over;
     const double end = start + 2.0 * over + o.arc_deg;
     if (o.directions == "both" || o.directions == "ccw")
         t.runs.push_back({circ::Direction::Ccw, start, over, o.arc_deg});
@@ -130,13 +132,21 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
         }
     }
     const bool fanuc = dialect == analysis::NcDialect::Fanuc;
+    // Every number written is in the controller's word format (4 decimals at most), or nothing is written.
+    auto word = [](char letter, double v) {
+        if (const std::string why = analysis::nc_word_problem(letter, v, 4); !why.empty())
+            throw CliError(kExitUsage, "the circle's program: " + why);
+        return std::string(" ") + letter + num(v);
+    };
+    if (!(dwell_s >= 0 && dwell_s <= 3600))
+        throw CliError(kExitUsage, "--dwell " + analysis::limits::check_in(dwell_s, 0, 3600, "s"));
     std::string out;
     analysis::write_nc_header(out, dialect, std::string("ballbar circular test ") + circ::plane_name(t.plane));
     auto comment = [&](const std::string& text) { out += "(" + text + ")\n"; };
     auto move = [&](const char* g, const std::array<double, 3>& p, bool with_feed) {
         out += g;
-        for (int i = 0; i < 3; ++i) out += std::string(" ") + letters[i] + num(p[static_cast<std::size_t>(i)]);
-        if (with_feed) out += " F" + num(t.feed_mm_min);
+        for (int i = 0; i < 3; ++i) out += word(letters[i], p[static_cast<std::size_t>(i)]);
+        if (with_feed) out += word('F', t.feed_mm_min);
         out += '\n';
     };
     auto dwell = [&] {
@@ -162,11 +172,11 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
             const double b = r.start_deg + sg * sweep * (i + 1) / pieces;
             const auto from = point(t.radius_mm, a), to = point(t.radius_mm, b);
             out += sg > 0 ? "G3" : "G2";
-            for (int j : {ax[0], ax[1]}) out += std::string(" ") + letters[j] + num(to[static_cast<std::size_t>(j)]);
+            for (int j : {ax[0], ax[1]}) out += word(letters[j], to[static_cast<std::size_t>(j)]);
             for (int j : {ax[0], ax[1]})
-                out += std::string(" ") + centre_words[j] +
-                       num(t.centre_mm[static_cast<std::size_t>(j)] - from[static_cast<std::size_t>(j)]);
-            out += " F" + num(t.feed_mm_min) + '\n';
+                out +=
+                    word(centre_words[j], t.centre_mm[static_cast<std::size_t>(j)] - from[static_cast<std::size_t>(j)]);
+            out += word('F', t.feed_mm_min) + '\n';
             a = b;
         }
         move("G1", point(t.radius_mm + t.feed_in_mm, a), true);  // feed-out

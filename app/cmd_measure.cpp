@@ -143,6 +143,7 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
                                      : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
             if (!o.operator_name.empty()) spec.answers.operator_name = o.operator_name;
             plan = acq::make_plan(machine, spec);
+            (void)acq::write_plan_program(plan, 0);  // every NC word in the controller's format, before a session
             storage::NewSession ns;
             ns.machine = machine.geometry;
             ns.source =

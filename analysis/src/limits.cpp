@@ -1,0 +1,64 @@
+// SPDX-License-Identifier: MIT
+#include "ballbar/analysis/limits.hpp"
+
+#include <charconv>
+#include <cmath>
+
+namespace ballbar::analysis::limits {
+namespace {
+
+std::string with_unit(std::string text, std::string_view unit) {
+    if (!unit.empty()) text.append(" ").append(unit);
+    return text;
+}
+
+}  // namespace
+
+std::string number_text(double value) {
+    char buf[64];
+    const auto res = std::to_chars(buf, buf + sizeof buf, value);
+    return res.ec == std::errc() ? std::string(buf, res.ptr) : std::string("?");
+}
+
+std::string check_in(double value, double lo, double hi, std::string_view unit) {
+    if (!std::isfinite(value)) return "is not a finite number";
+    if (value >= lo && value <= hi) return {};
+    return with_unit("= " + number_text(value) + " is outside [" + number_text(lo) + ", " + number_text(hi) + "]",
+                     unit);
+}
+
+std::string check_above(double value, double lo, double hi, std::string_view unit) {
+    if (!std::isfinite(value)) return "is not a finite number";
+    if (value > lo && value <= hi) return {};
+    return with_unit("= " + number_text(value) + " must be > " + number_text(lo) + " and <= " + number_text(hi), unit);
+}
+
+std::string check_integer_in(double value, double lo, double hi) {
+    if (!std::isfinite(value)) return "is not a finite number";
+    if (value == std::floor(value) && value >= lo && value <= hi) return {};
+    return "= " + number_text(value) + " is not an integer in [" + number_text(lo) + ", " + number_text(hi) + "]";
+}
+
+double param_limit(ParamUnit unit) {
+    switch (unit) {
+        case ParamUnit::mm:
+            return 10;
+        case ParamUnit::rad:
+            return 0.1;
+        case ParamUnit::mm_per_mm:
+            return 0.01;
+        case ParamUnit::mm_per_h:
+            return 10;
+        case ParamUnit::per_K:
+            return 1e-3;
+    }
+    return 0;
+}
+
+std::string check_param(Param p, double value) {
+    const ParamUnit unit = param_info(p).unit;
+    const double lim = param_limit(unit);
+    return check_in(value, -lim, lim, to_string(unit));
+}
+
+}  // namespace ballbar::analysis::limits
