@@ -15,8 +15,13 @@ std::string with_unit(std::string text, std::string_view unit) {
 }  // namespace
 
 std::string number_text(double value) {
+    // The shortest text that reads back, in fixed notation where that stays short ("200000", not
+    // "2e+05"), scientific beyond ("1e+308", "1e-300").
+    const double mag = std::abs(value);
+    const bool fixed = value == 0 || (mag >= 1e-5 && mag < 1e16);
     char buf[64];
-    const auto res = std::to_chars(buf, buf + sizeof buf, value);
+    const auto res = fixed ? std::to_chars(buf, buf + sizeof buf, value, std::chars_format::fixed)
+                           : std::to_chars(buf, buf + sizeof buf, value, std::chars_format::scientific);
     return res.ec == std::errc() ? std::string(buf, res.ptr) : std::string("?");
 }
 

@@ -60,7 +60,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"travel_rotary_1e308", R"("travel":{"C_deg":[0,1e308]})", "travel.C_deg[1] = 1e+308"},
                       Case{"pivot_1e308", R"("a_pivot_mm":[1e308,0,0])", "a_pivot_mm[0] = 1e+308"},
                       Case{"tool_ball_minus_1e6", R"("tool_ball_mm":[0,0,-1e6])", "tool_ball_mm[2] = -1000000"}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(MachineFile, TheProjectsOwnMachineFilesStayValid) {
     for (const char* f : {"rrttt.json", "tttrr.json", "rtttr.json"}) {
@@ -110,7 +110,7 @@ INSTANTIATE_TEST_SUITE_P(
              "rotation_deg.A = 1e+308"},
         Case{"confirm_not_boolean", kTests + R"(,"answers":{"confirm_setup":"yes"})",
              "confirm_setup must be true or false"}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(PlanFile, TheProjectsOwnPlanFilesStayValid) {
     for (const char* f : {"tttrr-quick.plan.json", "tttrr-table2.plan.json", "tttrr-two-sockets.plan.json"}) {

@@ -63,7 +63,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Word{"F_zero", 'F', 0.0, 1, nullptr}, Word{"P_ms", 'P', 1500.0, 0, "1500"},
                       Word{"P_negative", 'P', -1.0, 0, nullptr}, Word{"P_nine_digits", 'P', 1e9, 0, nullptr},
                       Word{"P_inf", 'P', kInf, 0, nullptr}, Word{"decimals_beyond_8", 'X', 1.0, 9, nullptr}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(NcWordFormat, ADwellBeyondTheControllersPWordIsRefused) {
     NcBlock b;

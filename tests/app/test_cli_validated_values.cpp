@@ -230,7 +230,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "solve compensate",
                 R"("field":"dv[0]")",
                 R"({"kinematics":"lei-hsu","u":[0,0,0,0.1,0.2],"dv":[1e5,0,0,0,0,0]})"}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 }  // namespace
 }  // namespace ballbar::test

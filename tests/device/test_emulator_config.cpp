@@ -57,7 +57,7 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"disconnect_at_1e308", R"({"faults": {"disconnect_at_s": 1e308}})", "faults.disconnect_at_s"},
         Case{"start_delay_1e308", R"({"faults": {"start_delay_s": 1e308}})", "faults.start_delay_s"},
         Case{"drop_probability_2", R"({"faults": {"drop_frame_probability": 2}})", "faults.drop_frame_probability"}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(EmulatorConfig, TheProjectsOwnConfigurationsStayValid) {
     for (const char* f : {"tttrr-emulator.json", "tttrr-emulator-measure.json"})

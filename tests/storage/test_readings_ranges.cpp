@@ -79,7 +79,7 @@ INSTANTIATE_TEST_SUITE_P(
         Row{"std_negative", "std_mm", "-0.001", "is outside [0, 10] mm"},
         Row{"std_1e308", "std_mm", "1e308", "is outside"}, Row{"x_infinity", "X_mm", "inf", "is not a finite number"},
         Row{"n_zero", "n", "0", "is not an integer"}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(ReadingsRanges, AMachineHeaderBeyondAnyMachineIsRefused) {
     std::string text = file_with("", "");
