@@ -47,15 +47,15 @@ std::string check_integer_in(double value, double lo, double hi) {
 double param_limit(ParamUnit unit) {
     switch (unit) {
         case ParamUnit::mm:
-            return 10;
+            return 1000;
         case ParamUnit::rad:
-            return 0.1;
+            return kPi;
         case ParamUnit::mm_per_mm:
-            return 0.01;
+            return 0.1;
         case ParamUnit::mm_per_h:
-            return 10;
+            return 1000;
         case ParamUnit::per_K:
-            return 1e-3;
+            return 0.01;
     }
     return 0;
 }

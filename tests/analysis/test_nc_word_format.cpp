@@ -112,9 +112,10 @@ TEST(Limits, CheckInNamesTheValueAndTheRange) {
 TEST(Limits, ErrorParametersHaveTheRangeOfTheirUnit) {
     EXPECT_EQ(limits::check_param(Param::X0C, 0.05), "");
     EXPECT_NE(limits::check_param(Param::X0C, 1e308).find("mm"), std::string::npos);
-    EXPECT_NE(limits::check_param(Param::B0A, 0.2).find("rad"), std::string::npos);
+    EXPECT_NE(limits::check_param(Param::B0A, 4.0).find("rad"), std::string::npos);
     EXPECT_EQ(limits::check_param(Param::B0A, 1e-4), "");
-    EXPECT_NE(limits::check_param(Param::bar_kappa, 0.01), "");
+    EXPECT_NE(limits::check_param(Param::bar_kappa, 0.1), "");
+    EXPECT_EQ(limits::check_param(Param::Y0A, 50.0), "") << "a model of another machine: compensate's bounds say so";
 }
 
 }  // namespace

@@ -161,7 +161,7 @@ INSTANTIATE_TEST_SUITE_P(
                 {{"m.json", R"({"format":"ballbar-model/1",)" + kModelMachine + R"(,"params":{"X0C":1e308}})"},
                  {"p.nc", kProgram}},
                 kCompensate,
-                "params.X0C = 1e+308 is outside [-10, 10] mm"},
+                "params.X0C = 1e+308 is outside [-1000, 1000] mm"},
         Refusal{"model_unknown_key",
                 {{"m.json", R"({"format":"ballbar-model/1",)" + kModelMachine + R"(,"params":{},"parms":{}})"},
                  {"p.nc", kProgram}},

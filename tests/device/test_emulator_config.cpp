@@ -51,7 +51,7 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"rapid_1e308", R"({"machine": {"rapid_mm_min": 1e308}})", "machine.rapid_mm_min = 1e+308"},
         Case{"rapid_zero", R"({"machine": {"rapid_deg_min": 0}})", "machine.rapid_deg_min = 0"},
         Case{"error_X0C_1e308", R"({"machine": {"errors": {"X0C": 1e308}}})", "machine.errors.X0C: X0C = 1e+308"},
-        Case{"error_B0A_deg_90", R"({"machine": {"errors": {"B0A_deg": 90}}})", "machine.errors.B0A_deg: B0A ="},
+        Case{"error_B0A_deg_200", R"({"machine": {"errors": {"B0A_deg": 200}}})", "machine.errors.B0A_deg: B0A ="},
         Case{"reply_delay_1e308", R"({"faults": {"reply_delay_ms": 1e308}})", "faults.reply_delay_ms = 1e+308"},
         Case{"stall_negative", R"({"faults": {"stall_s": -5}})", "faults.stall_s = -5"},
         Case{"disconnect_at_1e308", R"({"faults": {"disconnect_at_s": 1e308}})", "faults.disconnect_at_s"},

@@ -38,8 +38,9 @@ std::string check_above(double value, double lo, double hi, std::string_view uni
 /// Empty when `value` is an integer in [lo, hi].
 std::string check_integer_in(double value, double lo, double hi);
 
-/// The range of an error parameter's value in its own unit (mm: ±10, rad: ±0.1, mm/mm: ±0.01,
-/// mm/h: ±10, 1/K: ±0.001): a machine further off than this is a set-up mistake, not a fit.
+/// The range of an error parameter's value in its own unit (mm: ±1000, rad: ±π, mm/mm: ±0.1,
+/// mm/h: ±1000, 1/K: ±0.01): finite and far beyond any real machine, so that a model "of another
+/// machine" still meets `compensate`'s correction bounds (which name the line), while 1e308 is refused.
 double param_limit(ParamUnit unit);
 /// check_in(value, -param_limit, +param_limit, the unit's name).
 std::string check_param(Param p, double value);
