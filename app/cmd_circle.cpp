@@ -9,11 +9,13 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "ballbar/acquisition/circle_program.hpp"
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/analysis/circular.hpp"
+#include "ballbar/analysis/limits.hpp"
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/storage/trace_file.hpp"
@@ -33,9 +35,9 @@ struct PlanOptions {
     std::vector<double> centre_mm{0.0, 0.0, 0.0};
     double feed_mm_min = 1000.0;
     double feed_in_mm = 1.5;
-    double overshoot_deg = -1.0;  // <0: 45 for a full circle, 20 for a partial arc
+    std::optional<double> overshoot_deg;  // default: 45 for a full circle, 20 for a partial arc
     double arc_deg = 360.0;
-    double start_deg = 1e9;  // default: 0 (full) or −overshoot (partial)
+    std::optional<double> start_deg;  // default: 0 (full) or −overshoot (partial)
     std::string directions = "both";
     std::string dialect;
     std::string machine_file;
@@ -57,8 +59,8 @@ circ::TestSpec plan_test(const PlanOptions& o) {
     t.feed_mm_min = o.feed_mm_min;
     t.feed_in_mm = o.feed_in_mm;
     const bool full = o.arc_deg >= 360.0;
-    const double over = o.overshoot_deg >= 0.0 ? o.overshoot_deg : full ? 45.0 : 20.0;
-    const double start = o.start_deg < 1e8 ? o.start_deg : full ? 0.0 : -over;
+    const double over = o.overshoot_deg ? *o.overshoot_deg : full ? 45.0 : 20.0;  // (checked by validate())
+    const double start = o.start_deg ? *o.start_deg : full ? 0.0 : -over;
     const double end = start + 2.0 * over + o.arc_deg;
     if (o.directions == "both" || o.directions == "ccw")
         t.runs.push_back({circ::Direction::Ccw, start, over, o.arc_deg});
@@ -121,7 +123,11 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
                                                " .. " + num(range.max) + " mm");
         }
     }
-    return acquisition::circular_program(t, dialect, dwell_s);
+    try {
+        return acquisition::circular_program(t, dialect, dwell_s);
+    } catch (const acquisition::PlanError& e) {
+        throw CliError(kExitUsage, e.what());
+    }
 }
 
 void write_out(const std::string& path, const std::string& text) {

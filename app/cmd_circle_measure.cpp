@@ -416,7 +416,12 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
         throw CliError(kExitUsage, e.what());
     }
     const auto nc_dialect = dialect.value_or(analysis::NcDialect::Fanuc);
-    const std::string program = acq::circular_program(test, nc_dialect, dwell_s);
+    std::string program;
+    try {
+        program = acq::circular_program(test, nc_dialect, dwell_s);  // every word in the controller's format
+    } catch (const acq::PlanError& e) {
+        throw CliError(kExitUsage, e.what());
+    }
     const auto mode = o.json ? (o.non_interactive ? CircleOperator::Mode::JsonScripted : CircleOperator::Mode::Json)
                       : o.non_interactive ? CircleOperator::Mode::Scripted
                                           : CircleOperator::Mode::Terminal;

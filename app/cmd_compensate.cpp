@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "ballbar/analysis/compensate.hpp"
+#include "ballbar/analysis/limits.hpp"
 #include "ballbar/analysis/nc_compensate.hpp"
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/storage/machine_json.hpp"
@@ -71,6 +72,14 @@ Model parse_model(const std::string& text, const std::string& source) {
     if (j.contains("format") && j["format"] != "ballbar-model/1")
         throw CliError(kExitUsage, source + ": format " + j["format"].dump() + " is not ballbar-model/1");
     if (!j.contains("machine")) throw CliError(kExitUsage, source + ": no \"machine\" (the geometry is needed)");
+    static constexpr const char* kModelKeys[] = {"format",  "machine",         "params",   "std",       "unobservable",
+                                                 "sockets", "residual_rms_um", "readings", "converged", "empirical",
+                                                 "added"};
+    for (const auto& item : j.items())
+        if (std::find(std::begin(kModelKeys), std::end(kModelKeys), item.key()) == std::end(kModelKeys))
+            throw CliError(kExitUsage, source + ": " + item.key() +
+                                           ": unknown key (format, machine, params, std, unobservable, sockets, "
+                                           "residual_rms_um, readings, converged, empirical, added)");
     Model m;
     m.source = source;
     try {
@@ -85,6 +94,8 @@ Model parse_model(const std::string& text, const std::string& source) {
         if (!p) throw CliError(kExitUsage, source + ": params." + item.key() + ": unknown parameter");
         if (!item.value().is_number() || !std::isfinite(item.value().get<double>()))
             throw CliError(kExitUsage, source + ": params." + item.key() + ": must be a finite number");
+        if (const std::string why = ba::limits::check_param(*p, item.value().get<double>()); !why.empty())
+            throw CliError(kExitUsage, source + ": params." + item.key() + " " + why);
         m.params[*p] = item.value().get<double>();
     }
     if (j.contains("empirical")) {  // terms learned by `discover`: angular error tables, positioning errors
@@ -222,9 +233,13 @@ ba::NcOffsetTable parse_offsets(const std::string& text, const std::string& sour
         throw CliError(kExitUsage, source + ": malformed JSON: " + e.what());
     }
     if (!j.is_object()) throw CliError(kExitUsage, source + ": the table must be a JSON object");
+    // Positions and lengths within ±100 m, rotary offsets within ±36000° (docs/compensation.md).
     auto number = [&](const json& v, const std::string& field) {
-        if (!v.is_number() || !std::isfinite(v.get<double>()) || std::abs(v.get<double>()) > 1e7)
-            throw CliError(kExitUsage, source + ": " + field + ": must be a finite number (|value| <= 1e7)");
+        if (!v.is_number()) throw CliError(kExitUsage, source + ": " + field + ": must be a number");
+        const bool deg = field.size() > 4 && field.compare(field.size() - 4, 4, "_deg") == 0;
+        const double lim = deg ? ba::limits::kRotary_deg : ba::limits::kPosition_mm;
+        if (const std::string why = ba::limits::check_in(v.get<double>(), -lim, lim, deg ? "deg" : "mm"); !why.empty())
+            throw CliError(kExitUsage, source + ": " + field + " " + why);
         return v.get<double>();
     };
     ba::NcOffsetTable t;

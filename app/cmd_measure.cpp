@@ -162,7 +162,9 @@ acq::Plan new_plan(const MeasureOptions& o) {
                                  ? acq::default_plan(machine)
                                  : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
         if (!o.operator_name.empty()) spec.answers.operator_name = o.operator_name;
-        return acq::make_plan(machine, spec);
+        acq::Plan plan = acq::make_plan(machine, spec);
+        (void)acq::write_plan_program(plan, 0);  // every NC word in the controller's format, before a session
+        return plan;
     } catch (const acq::PlanError& e) {
         throw CliError(kExitUsage, e.what());
     }

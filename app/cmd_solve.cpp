@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "ballbar/analysis/limits.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/ssm.hpp"
 #include "command.hpp"
@@ -78,9 +79,30 @@ double get_number(const json& obj, const std::string& path, const char* key) {
 ba::Vec3 get_vec3(const json& obj, const std::string& path, const char* key) {
     return vec3(*find(obj, path, key, true), join(path, key));
 }
+/// The documented range of a request's value (docs/analysis.md, "Ranges"), or RequestError naming it.
+double in_range(double v, const std::string& field, double lo, double hi, const char* unit) {
+    if (const std::string why = ba::limits::check_in(v, lo, hi, unit); !why.empty()) throw RequestError{why, field};
+    return v;
+}
+ba::Vec3 in_range(const ba::Vec3& v, const std::string& field, double lim, const char* unit) {
+    for (int i = 0; i < 3; ++i) in_range(v[i], index(field, static_cast<std::size_t>(i)), -lim, lim, unit);
+    return v;
+}
+/// A position (socket, pivot, point) and a small length error (ΔV, Δl): ±100 m and ±10 mm.
+ba::Vec3 get_position(const json& obj, const std::string& path, const char* key) {
+    return in_range(get_vec3(obj, path, key), join(path, key), ba::limits::kPosition_mm, "mm");
+}
+ba::Vec3 get_error(const json& obj, const std::string& path, const char* key) {
+    return in_range(get_vec3(obj, path, key), join(path, key), ba::limits::kSmallLength_mm, "mm");
+}
+/// A test's rotation, rad: at most one turn each way.
+double get_rotation(const json& obj, const std::string& path, const char* key) {
+    const double lim = ba::deg_to_rad(ba::limits::kRotation_deg);
+    return in_range(get_number(obj, path, key), join(path, key), -lim, lim, "rad");
+}
 /// [0, 0, z] fields of the seed's models: x and y must be zero.
 double get_axial(const json& obj, const std::string& path, const char* key, const char* why) {
-    const ba::Vec3 v = get_vec3(obj, path, key);
+    const ba::Vec3 v = get_position(obj, path, key);
     for (int i = 0; i < 2; ++i)
         if (v[i] != 0.0)
             throw RequestError{std::string("must be 0: ") + why, index(join(path, key), static_cast<std::size_t>(i))};
@@ -110,18 +132,21 @@ json read_request(const std::string& input_path) {
 
 json solve_ssm(const json& req) {
     only_keys(req, "", {"socket_mm", "points_mm", "delta_l_mm", "std_mm", "nominal_mm", "max_condition"});
-    const ba::Vec3 socket = get_vec3(req, "", "socket_mm");
+    const ba::Vec3 socket = get_position(req, "", "socket_mm");
     const json& jp = *find(req, "", "points_mm", true);
     if (!jp.is_array()) throw RequestError{"must be an array of [x, y, z] points", "points_mm"};
     std::vector<ba::Vec3> points;
     for (std::size_t i = 0; i < jp.size(); ++i) {
-        points.push_back(vec3(jp[i], index("points_mm", i)));
+        points.push_back(
+            in_range(vec3(jp[i], index("points_mm", i)), index("points_mm", i), ba::limits::kPosition_mm, "mm"));
         if ((points.back() - socket).norm() < 1e-6)
             throw RequestError{"coincides with the socket", index("points_mm", i)};
     }
     if (points.size() < 3)
         throw RequestError{"SSM needs at least 3 points, got " + std::to_string(points.size()), "points_mm"};
     const std::vector<double> dl = numbers(*find(req, "", "delta_l_mm", true), "delta_l_mm");
+    for (std::size_t i = 0; i < dl.size(); ++i)
+        in_range(dl[i], index("delta_l_mm", i), -ba::limits::kSmallLength_mm, ba::limits::kSmallLength_mm, "mm");
     if (dl.size() != points.size())
         throw RequestError{
             "has " + std::to_string(dl.size()) + " entries for " + std::to_string(points.size()) + " points",
@@ -134,16 +159,18 @@ json solve_ssm(const json& req) {
                 "has " + std::to_string(nominal.size()) + " entries for " + std::to_string(points.size()) + " points",
                 "nominal_mm"};
         for (std::size_t i = 0; i < nominal.size(); ++i)
-            if (!(nominal[i] > 0)) throw RequestError{"must be positive", index("nominal_mm", i)};
+            if (const std::string why = ba::limits::check_above(nominal[i], 0, ba::limits::kLength_mm, "mm");
+                !why.empty())
+                throw RequestError{why, index("nominal_mm", i)};
     }
     ba::SsmOptions opt;
     if (const json* js = find(req, "", "std_mm", false)) {
         opt.reading_std_mm = number(*js, "std_mm");
-        if (opt.reading_std_mm < 0) throw RequestError{"must not be negative", "std_mm"};
+        in_range(opt.reading_std_mm, "std_mm", 0, ba::limits::kSmallLength_mm, "mm");
     }
     if (const json* jc = find(req, "", "max_condition", false)) {
         opt.max_condition = number(*jc, "max_condition");
-        if (opt.max_condition < 1) throw RequestError{"must be at least 1", "max_condition"};
+        in_range(opt.max_condition, "max_condition", 1, 1e12, "");
     }
     // The layout's conditioning is the points' fault; anything the solver refuses after that, the readings'.
     const double cond = ba::ssm_condition_number(socket, points);
@@ -199,22 +226,22 @@ json solution_json(const ba::OrientationSolution& s, Angles which) {
 ba::OrientationSolution rtttr_spindle(const json& j, const std::string& p) {
     only_keys(j, p, {"pivot_mm", "tool_ball_mm", "beta_rad", "dV1_mm", "dV2_mm"});
     ba::RtttrSpindleInput in;
-    in.pivot_mm = get_vec3(j, p, "pivot_mm");
+    in.pivot_mm = get_position(j, p, "pivot_mm");
     in.z_r_mm = get_axial(j, p, "tool_ball_mm", "the seed's model has the tool ball on the spindle axis");
-    in.beta_rad = get_number(j, p, "beta_rad");
-    in.dV1_mm = get_vec3(j, p, "dV1_mm");
-    in.dV2_mm = get_vec3(j, p, "dV2_mm");
+    in.beta_rad = get_rotation(j, p, "beta_rad");
+    in.dV1_mm = get_error(j, p, "dV1_mm");
+    in.dV2_mm = get_error(j, p, "dV2_mm");
     return ba::solve_orientation(in);
 }
 
 ba::OrientationSolution rtttr_table(const json& j, const std::string& p) {
     only_keys(j, p, {"a_pivot_mm", "socket_mm", "alpha_rad", "dV1_mm", "dV2_mm"});
     ba::RtttrTableInput in;
-    in.a_pivot_mm = get_vec3(j, p, "a_pivot_mm");
-    in.socket_mm = get_vec3(j, p, "socket_mm");
-    in.alpha_rad = get_number(j, p, "alpha_rad");
-    in.dV1_mm = get_vec3(j, p, "dV1_mm");
-    in.dV2_mm = get_vec3(j, p, "dV2_mm");
+    in.a_pivot_mm = get_position(j, p, "a_pivot_mm");
+    in.socket_mm = get_position(j, p, "socket_mm");
+    in.alpha_rad = get_rotation(j, p, "alpha_rad");
+    in.dV1_mm = get_error(j, p, "dV1_mm");
+    in.dV2_mm = get_error(j, p, "dV2_mm");
     return ba::solve_orientation(in);
 }
 
@@ -266,12 +293,12 @@ json solve_orientation(const json& req) {
         case ba::MachineType::RRTTT: {
             only_keys(req, "", {"machine", "pivot_mm", "tool_ball_mm", "alpha_rad", "beta_rad", "dV1_mm", "dV2_mm"});
             ba::RrtttInput in;
-            in.pivot_mm = get_vec3(req, "", "pivot_mm");
+            in.pivot_mm = get_position(req, "", "pivot_mm");
             in.z_r_mm = get_axial(req, "", "tool_ball_mm", "the seed's model has the tool ball on the spindle axis");
-            in.alpha_rad = get_number(req, "", "alpha_rad");
-            in.beta_rad = get_number(req, "", "beta_rad");
-            in.dV1_mm = get_vec3(req, "", "dV1_mm");
-            in.dV2_mm = get_vec3(req, "", "dV2_mm");
+            in.alpha_rad = get_rotation(req, "", "alpha_rad");
+            in.beta_rad = get_rotation(req, "", "beta_rad");
+            in.dV1_mm = get_error(req, "", "dV1_mm");
+            in.dV2_mm = get_error(req, "", "dV2_mm");
             return solution_json(ba::solve_orientation(in), {true, true, false});
         }
         case ba::MachineType::TTTRR: {
@@ -279,13 +306,13 @@ json solve_orientation(const json& req) {
                 req, "",
                 {"machine", "a_pivot_mm", "c_offset_mm", "socket_mm", "alpha_rad", "gamma_rad", "dV1_mm", "dV2_mm"});
             ba::TtttrrInput in;
-            in.a_pivot_mm = get_vec3(req, "", "a_pivot_mm");
+            in.a_pivot_mm = get_position(req, "", "a_pivot_mm");
             in.z_ag_mm = get_axial(req, "", "c_offset_mm", "the seed's model has the C axis meet the A axis");
-            in.socket_mm = get_vec3(req, "", "socket_mm");
-            in.alpha_rad = get_number(req, "", "alpha_rad");
-            in.gamma_rad = get_number(req, "", "gamma_rad");
-            in.dV1_mm = get_vec3(req, "", "dV1_mm");
-            in.dV2_mm = get_vec3(req, "", "dV2_mm");
+            in.socket_mm = get_position(req, "", "socket_mm");
+            in.alpha_rad = get_rotation(req, "", "alpha_rad");
+            in.gamma_rad = get_rotation(req, "", "gamma_rad");
+            in.dV1_mm = get_error(req, "", "dV1_mm");
+            in.dV2_mm = get_error(req, "", "dV2_mm");
             return solution_json(ba::solve_orientation(in), {true, false, true});
         }
         case ba::MachineType::RTTTR:

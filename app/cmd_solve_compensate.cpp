@@ -16,6 +16,7 @@
 
 #include "ballbar/analysis/compensate.hpp"
 #include "ballbar/analysis/lei_hsu.hpp"
+#include "ballbar/analysis/limits.hpp"
 #include "command.hpp"
 
 namespace ballbar::app {
@@ -33,6 +34,12 @@ double finite_number(const json& j, const std::string& field) {
     if (!j.is_number()) throw BadField{"must be a number", field};
     const double v = j.get<double>();
     if (!std::isfinite(v)) throw BadField{"must be finite", field};
+    return v;
+}
+
+/// `v` within [-lim, lim] (docs/compensation.md, "Ranges"), or BadField naming it.
+double within(double v, double lim, const char* unit, const std::string& field) {
+    if (const std::string why = ba::limits::check_in(v, -lim, lim, unit); !why.empty()) throw BadField{why, field};
     return v;
 }
 
@@ -63,6 +70,7 @@ json solve_compensate(const json& req) {
         if (!o->is_object()) throw BadField{"must be an object {\"Xw0\", \"Yw0\", \"Zw0\", \"Z3\"}", "offsets_mm"};
         for (const auto& item : o->items()) {
             const std::string f = "offsets_mm." + item.key();
+            if (item.value().is_number()) within(item.value().get<double>(), ba::limits::kPosition_mm, "mm", f);
             if (item.key() == "Xw0")
                 off.Xw0_mm = finite_number(item.value(), f);
             else if (item.key() == "Yw0")
@@ -84,6 +92,11 @@ json solve_compensate(const json& req) {
     }
     const ba::Vec5 u = fixed_array<5>(req, "u", "[x_m, y_m, z_m, theta_a_rad, theta_c_rad]");
     const ba::Vec6 dv = fixed_array<6>(req, "dv", "[dx, dy, dz, di, dj, dk]");
+    const double turns = ba::deg_to_rad(ba::limits::kRotary_deg);
+    for (int i = 0; i < 5; ++i)
+        within(u[i], i < 3 ? ba::limits::kPosition_mm : turns, i < 3 ? "mm" : "rad", "u[" + std::to_string(i) + "]");
+    for (int i = 0; i < 6; ++i)  // a pose error: mm, and the change of a unit direction
+        within(dv[i], i < 3 ? ba::limits::kSmallLength_mm : 1.0, i < 3 ? "mm" : "", "dv[" + std::to_string(i) + "]");
 
     const ba::LeiHsuCorrection fo = ba::lei_hsu_first_order(u, dv, tol);
     const ba::LeiHsuCorrection ex = ba::lei_hsu_exact(off, u, dv, tol);

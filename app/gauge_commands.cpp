@@ -121,7 +121,7 @@ gg::GaugeFaults parse_faults(const std::string& spec) {
             try {
                 std::size_t used = 0;
                 p = std::stod(item.substr(eq + 1), &used);
-                if (used != item.size() - eq - 1 || p < 0 || p > 1) throw std::invalid_argument("range");
+                if (used != item.size() - eq - 1 || !(p >= 0 && p <= 1)) throw std::invalid_argument("range");
             } catch (const std::exception&) {
                 throw CliError(kExitUsage, "--faults: '" + item + "': a probability must be 0..1");
             }

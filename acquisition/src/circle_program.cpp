@@ -7,6 +7,10 @@
 #include <iomanip>
 #include <sstream>
 
+#include "ballbar/acquisition/machine_file.hpp"
+#include "ballbar/analysis/limits.hpp"
+#include "ballbar/analysis/nc_program.hpp"
+
 namespace ballbar::acquisition {
 
 namespace circ = analysis::circular;
@@ -35,13 +39,21 @@ std::string circular_program(const circ::TestSpec& t, analysis::NcDialect dialec
     };
     const auto& num = nc_number;
     const bool fanuc = dialect == analysis::NcDialect::Fanuc;
+    // Every number written is in the controller's word format (4 decimals at most), or nothing is written.
+    auto word = [&](char letter, double v) {
+        if (const std::string why = analysis::nc_word_problem(letter, v, 4); !why.empty())
+            throw PlanError("the circle's program: " + why);
+        return std::string(" ") + letter + num(v);
+    };
+    if (!(dwell_s >= 0 && dwell_s <= 3600))
+        throw PlanError("--dwell " + analysis::limits::check_in(dwell_s, 0, 3600, "s"));
     std::string out;
     analysis::write_nc_header(out, dialect, std::string("ballbar circular test ") + circ::plane_name(t.plane));
     auto comment = [&](const std::string& text) { out += "(" + text + ")\n"; };
     auto move = [&](const char* g, const std::array<double, 3>& p, bool with_feed) {
         out += g;
-        for (int i = 0; i < 3; ++i) out += std::string(" ") + letters[i] + num(p[static_cast<std::size_t>(i)]);
-        if (with_feed) out += " F" + num(t.feed_mm_min);
+        for (int i = 0; i < 3; ++i) out += word(letters[i], p[static_cast<std::size_t>(i)]);
+        if (with_feed) out += word('F', t.feed_mm_min);
         out += '\n';
     };
     auto dwell = [&] {
@@ -67,11 +79,10 @@ std::string circular_program(const circ::TestSpec& t, analysis::NcDialect dialec
             const double b = r.start_deg + sg * sweep * (i + 1) / pieces;
             const auto from = point(t.radius_mm, a), to = point(t.radius_mm, b);
             out += sg > 0 ? "G3" : "G2";
-            for (int j : {ax[0], ax[1]}) out += std::string(" ") + letters[j] + num(to[static_cast<std::size_t>(j)]);
+            for (int j : {ax[0], ax[1]}) out += word(letters[j], to[static_cast<std::size_t>(j)]);
             for (int j : {ax[0], ax[1]})
-                out += std::string(" ") + centre_words[j] +
-                       num(t.centre_mm[static_cast<std::size_t>(j)] - from[static_cast<std::size_t>(j)]);
-            out += " F" + num(t.feed_mm_min) + '\n';
+                out += word(centre_words[j], t.centre_mm[static_cast<std::size_t>(j)] - from[static_cast<std::size_t>(j)]);
+            out += word('F', t.feed_mm_min) + '\n';
             a = b;
         }
         move("G1", point(t.radius_mm + t.feed_in_mm, a), true);  // feed-out

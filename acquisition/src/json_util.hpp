@@ -2,11 +2,13 @@
 // Small checked accessors for the machine and plan files (internal).
 #pragma once
 
+#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
 
 #include "ballbar/acquisition/machine_file.hpp"
+#include "ballbar/analysis/limits.hpp"
 
 namespace ballbar::acquisition::detail {
 
@@ -22,6 +24,44 @@ inline double get_number(const nlohmann::json& j, const std::string& key, const 
     if (!j.contains(key)) throw PlanError(what + ": missing key \"" + key + "\"");
     if (!j.at(key).is_number()) throw PlanError(what + ": \"" + key + "\" must be a number");
     return j.at(key).get<double>();
+}
+
+/// Refuses a key of `j` not in `allowed`: a typo silently ignored would run a procedure the operator
+/// did not ask for. `what` names the file and the object ("machine file", "plan file: capture").
+inline void only_keys(const nlohmann::json& j, const std::string& what,
+                      std::initializer_list<std::string_view> allowed) {
+    for (const auto& item : j.items()) {
+        bool known = false;
+        for (const std::string_view k : allowed) known = known || item.key() == k;
+        if (known) continue;
+        std::string list;
+        for (const std::string_view k : allowed) list.append(list.empty() ? "" : ", ").append(k);
+        throw PlanError(what + ": unknown key \"" + item.key() + "\" (known: " + list + ")");
+    }
+}
+
+/// `value` finite and in [lo, hi], or PlanError naming the field ("plan file: dwell_s = 1e+308 is outside ...").
+inline double require_in(const std::string& what, const std::string& key, double value, double lo, double hi,
+                         std::string_view unit) {
+    if (const std::string why = analysis::limits::check_in(value, lo, hi, unit); !why.empty())
+        throw PlanError(what + ": " + key + " " + why);
+    return value;
+}
+
+/// `value` finite, > lo and <= hi.
+inline double require_above(const std::string& what, const std::string& key, double value, double lo, double hi,
+                            std::string_view unit) {
+    if (const std::string why = analysis::limits::check_above(value, lo, hi, unit); !why.empty())
+        throw PlanError(what + ": " + key + " " + why);
+    return value;
+}
+
+/// A position vector: every component within ±limits::kPosition_mm.
+inline analysis::Vec3 require_position(const std::string& what, const std::string& key, const analysis::Vec3& v) {
+    static constexpr const char* kAxes[] = {"[0]", "[1]", "[2]"};
+    for (int i = 0; i < 3; ++i)
+        require_in(what, key + kAxes[i], v[i], -analysis::limits::kPosition_mm, analysis::limits::kPosition_mm, "mm");
+    return v;
 }
 
 inline std::string get_string(const nlohmann::json& j, const std::string& key, const std::string& what) {

@@ -9,6 +9,7 @@ namespace ballbar::acquisition {
 
 using nlohmann::json;
 using namespace ballbar::analysis;
+namespace limits = ballbar::analysis::limits;
 
 std::string_view axis_name(Axis a) {
     static constexpr std::array<std::string_view, kAxisCount> names = {"X", "Y", "Z", "A", "B", "C"};
@@ -32,6 +33,9 @@ std::string travel_key(Axis a) {
 MachineFile parse_machine_file(std::string_view json_text) {
     const json j = detail::parse_json(json_text, "machine file");
     if (!j.is_object()) throw PlanError("machine file: expected a JSON object");
+    detail::only_keys(
+        j, "machine file",
+        {"format", "type", "name", "tool_ball_mm", "a_pivot_mm", "c_offset_mm", "dialect", "feed_mm_min", "travel"});
     if (j.contains("format") && j.at("format") != kFormat)
         throw PlanError("machine file: format must be \"" + std::string(kFormat) + "\"");
     MachineFile m;
@@ -40,9 +44,10 @@ MachineFile parse_machine_file(std::string_view json_text) {
     if (!t) throw PlanError("machine file: type \"" + type + "\" is not RRTTT, TTTRR or RTTTR");
     m.geometry.type = *t;
     if (j.contains("name")) m.geometry.name = detail::get_string(j, "name", "machine file");
-    m.geometry.tool_ball_mm = detail::get_vec3(j, "tool_ball_mm", "machine file", Vec3::Zero());
-    m.geometry.a_pivot_mm = detail::get_vec3(j, "a_pivot_mm", "machine file", Vec3::Zero());
-    m.geometry.c_offset_mm = detail::get_vec3(j, "c_offset_mm", "machine file", Vec3::Zero());
+    for (auto [key, into] :
+         {std::pair{"tool_ball_mm", &m.geometry.tool_ball_mm}, std::pair{"a_pivot_mm", &m.geometry.a_pivot_mm},
+          std::pair{"c_offset_mm", &m.geometry.c_offset_mm}})
+        *into = detail::require_position("machine file", key, detail::get_vec3(j, key, "machine file", Vec3::Zero()));
     if (j.contains("dialect")) {
         const std::string d = detail::get_string(j, "dialect", "machine file");
         const auto dialect = parse_nc_dialect(d);
@@ -50,8 +55,9 @@ MachineFile parse_machine_file(std::string_view json_text) {
         m.dialect = *dialect;
     }
     if (j.contains("feed_mm_min")) {
-        m.feed_mm_min = detail::get_number(j, "feed_mm_min", "machine file");
-        if (!(m.feed_mm_min > 0)) throw PlanError("machine file: feed_mm_min must be positive");
+        m.feed_mm_min =
+            detail::require_in("machine file", "feed_mm_min", detail::get_number(j, "feed_mm_min", "machine file"),
+                               limits::kFeedMin_mm_min, limits::kFeedMax_mm_min, "mm/min");
     }
     if (j.contains("travel")) {
         const json& tr = j.at("travel");
@@ -65,6 +71,11 @@ MachineFile parse_machine_file(std::string_view json_text) {
                 const json& v = it.value();
                 if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number() || v[0] > v[1])
                     throw PlanError("machine file: travel." + it.key() + " must be [min, max] with min <= max");
+                const double lim = is_rotary(a) ? limits::kRotary_deg : limits::kPosition_mm;
+                for (int k = 0; k < 2; ++k)
+                    detail::require_in("machine file", "travel." + it.key() + (k == 0 ? "[0]" : "[1]"),
+                                       v[static_cast<std::size_t>(k)].get<double>(), -lim, lim,
+                                       is_rotary(a) ? "deg" : "mm");
                 const double scale = is_rotary(a) ? deg_to_rad(1.0) : 1.0;
                 m.travel[static_cast<std::size_t>(i)] = {v[0].get<double>() * scale, v[1].get<double>() * scale};
             }

@@ -234,12 +234,26 @@ NcProgram make_nc_program(const Plan& plan, std::size_t from_point, const NcOpti
     return make_measuring_program(plan, pts, options).nc;
 }
 
+namespace {
+
+/// The program's text; a number outside the controller's word format (a position beyond five
+/// integer digits, say) is the plan's fault: PlanError.
+std::string program_text(const NcProgram& program) {
+    try {
+        return write_nc_program(program, "ballbar SSM");
+    } catch (const AnalysisError& e) {
+        throw PlanError(std::string("NC program: ") + e.what());
+    }
+}
+
+}  // namespace
+
 std::string write_plan_program(const Plan& plan, std::size_t from_point) {
-    return write_nc_program(make_nc_program(plan, from_point), "ballbar SSM");
+    return program_text(make_nc_program(plan, from_point));
 }
 
 std::string write_program(const Plan& plan, std::span<const std::size_t> points) {
-    return write_nc_program(make_measuring_program(plan, points).nc, "ballbar SSM");
+    return program_text(make_measuring_program(plan, points).nc);
 }
 
 bool is_program_stop(const NcBlock& block) {

@@ -12,6 +12,7 @@ namespace ballbar::acquisition {
 
 using nlohmann::json;
 using namespace ballbar::analysis;
+namespace limits = ballbar::analysis::limits;
 
 std::string_view to_string(TestKind kind) {
     switch (kind) {
@@ -67,11 +68,36 @@ std::string check_travel(const MachineFile& machine, const Pose& pose) {
     return {};
 }
 
+void check_plan_spec(const PlanSpec& spec, const std::string& what) {
+    detail::require_above(what, "bar_length_mm", spec.bar_length_mm, 0, limits::kLength_mm, "mm");
+    const CaptureSettings& c = spec.capture;
+    const std::string cw = what + ": capture";
+    detail::require_in(cw, "window_s", c.window_s, kMinWindow_s, kMaxWindow_s, "s");
+    detail::require_above(cw, "max_std_um", c.max_std_mm * 1e3, 0, 1000, "um");
+    detail::require_above(cw, "max_drift_um", c.max_drift_mm * 1e3, 0, 1000, "um");
+    detail::require_above(cw, "tolerance_mm", c.tolerance_mm, 0, 1, "mm");
+    if (const std::string why = limits::check_integer_in(c.retries, 0, kMaxRetries); !why.empty())
+        throw PlanError(cw + ": retries " + why);
+    detail::require_in(what, "max_condition", spec.max_condition, 1, 1e6, "");
+    // One window to settle, one to average: a shorter dwell can never give a point.
+    if (!(spec.dwell_s >= 2 * c.window_s && spec.dwell_s <= kMaxPlanDwell_s)) {
+        std::ostringstream os;
+        os << what << ": dwell_s = " << limits::number_text(spec.dwell_s) << " s: it must be at least two capture "
+           << "windows (2 x capture.window_s = " << 2 * c.window_s << " s: one to settle, one to average) and at most "
+           << kMaxPlanDwell_s << " s";
+        throw PlanError(os.str());
+    }
+    for (std::size_t t = 0; t < spec.tests.size(); ++t) {
+        const std::string tw = what + ": tests[" + std::to_string(t) + "]";
+        detail::require_position(tw, "socket_mm", spec.tests[t].socket_mm);
+        for (const double r : {spec.tests[t].first_rad, spec.tests[t].second_rad})
+            detail::require_in(tw, "rotation_deg", rad_to_deg(r), -limits::kRotation_deg, limits::kRotation_deg, "deg");
+    }
+}
+
 Plan make_plan(const MachineFile& machine, const PlanSpec& spec) {
     if (spec.tests.empty()) throw PlanError("plan: no tests to run");
-    if (!(spec.bar_length_mm > 0)) throw PlanError("plan: bar_length_mm must be positive");
-    if (!(spec.dwell_s > spec.capture.window_s))
-        throw PlanError("plan: dwell_s must be longer than the capture window (capture.window_s)");
+    check_plan_spec(spec, "plan");
     const MachineGeometry& geom = machine.geometry;
     Plan plan;
     plan.machine = machine;
@@ -126,6 +152,7 @@ namespace {
 TestSpec parse_test(const json& jt, MachineType type, int index) {
     const std::string what = "plan file: tests[" + std::to_string(index) + "]";
     if (!jt.is_object()) throw PlanError(what + " must be an object");
+    detail::only_keys(jt, what, {"socket_mm", "rotation_deg"});
     TestSpec t;
     if (!jt.contains("socket_mm")) throw PlanError(what + ": missing key \"socket_mm\"");
     t.socket_mm = detail::to_vec3(jt.at("socket_mm"), "socket_mm", what);
@@ -134,7 +161,8 @@ TestSpec parse_test(const json& jt, MachineType type, int index) {
     const RotaryAxes axes = rotary_axes(type);
     for (auto it = jt.at("rotation_deg").begin(); it != jt.at("rotation_deg").end(); ++it) {
         if (!it.value().is_number()) throw PlanError(what + ": rotation_deg." + it.key() + " must be a number");
-        const double v = deg_to_rad(it.value().get<double>());
+        const double v = deg_to_rad(detail::require_in(what, "rotation_deg." + it.key(), it.value().get<double>(),
+                                                       -limits::kRotation_deg, limits::kRotation_deg, "deg"));
         if (it.key().size() == 1 && it.key()[0] == axes.first)
             t.first_rad = v;
         else if (it.key().size() == 1 && it.key()[0] == axes.second)
@@ -167,6 +195,8 @@ std::string_view failure_action_name(PointFailureAction a) {
 PlanSpec parse_plan_file(std::string_view json_text, MachineType type) {
     const json j = detail::parse_json(json_text, "plan file");
     if (!j.is_object()) throw PlanError("plan file: expected a JSON object");
+    detail::only_keys(j, "plan file",
+                      {"format", "bar_length_mm", "layout", "dwell_s", "max_condition", "tests", "capture", "answers"});
     if (j.contains("format") && j.at("format") != kPlanFormat)
         throw PlanError("plan file: format must be \"" + std::string(kPlanFormat) + "\"");
     PlanSpec s;
@@ -186,6 +216,8 @@ PlanSpec parse_plan_file(std::string_view json_text, MachineType type) {
     if (j.contains("capture")) {
         const json& c = j.at("capture");
         const std::string w = "plan file: capture";
+        if (!c.is_object()) throw PlanError(w + " must be an object");
+        detail::only_keys(c, w, {"mode", "window_s", "max_std_um", "max_drift_um", "tolerance_mm", "retries"});
         if (c.contains("mode")) {
             const std::string mode = detail::get_string(c, "mode", w);
             if (mode != "auto" && mode != "manual") throw PlanError(w + ": mode must be auto or manual");
@@ -195,18 +227,29 @@ PlanSpec parse_plan_file(std::string_view json_text, MachineType type) {
         if (c.contains("max_std_um")) s.capture.max_std_mm = detail::get_number(c, "max_std_um", w) * 1e-3;
         if (c.contains("max_drift_um")) s.capture.max_drift_mm = detail::get_number(c, "max_drift_um", w) * 1e-3;
         if (c.contains("tolerance_mm")) s.capture.tolerance_mm = detail::get_number(c, "tolerance_mm", w);
-        if (c.contains("retries")) s.capture.retries = static_cast<int>(detail::get_number(c, "retries", w));
-        if (!(s.capture.window_s > 0)) throw PlanError(w + ": window_s must be positive");
+        if (c.contains("retries")) {
+            const double r = detail::get_number(c, "retries", w);
+            if (const std::string why = limits::check_integer_in(r, 0, kMaxRetries); !why.empty())
+                throw PlanError(w + ": retries " + why);
+            s.capture.retries = static_cast<int>(r);
+        }
     }
     if (j.contains("answers")) {
         const json& a = j.at("answers");
         const std::string w = "plan file: answers";
+        if (!a.is_object()) throw PlanError(w + " must be an object");
+        detail::only_keys(a, w, {"operator", "confirm_setup", "accept_results", "on_point_failure"});
         if (a.contains("operator")) s.answers.operator_name = detail::get_string(a, "operator", w);
-        if (a.contains("confirm_setup")) s.answers.confirm_setup = a.at("confirm_setup").get<bool>();
-        if (a.contains("accept_results")) s.answers.accept_results = a.at("accept_results").get<bool>();
+        for (auto [key, into] : {std::pair{"confirm_setup", &s.answers.confirm_setup},
+                                 std::pair{"accept_results", &s.answers.accept_results}}) {
+            if (!a.contains(key)) continue;
+            if (!a.at(key).is_boolean()) throw PlanError(w + ": " + key + " must be true or false");
+            *into = a.at(key).get<bool>();
+        }
         if (a.contains("on_point_failure"))
             s.answers.on_point_failure = parse_failure_action(detail::get_string(a, "on_point_failure", w));
     }
+    check_plan_spec(s, "plan file");
     return s;
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "ballbar/analysis/circular.hpp"
+#include "ballbar/analysis/limits.hpp"
 
 namespace ballbar::analysis::circular {
 
@@ -63,22 +64,29 @@ std::array<int, 2> plane_axis_index(Plane plane) {
 }
 
 std::string TestSpec::validate() const {
-    auto finite = [](double v) { return std::isfinite(v); };
-    if (!finite(radius_mm) || radius_mm <= 0.0) return "radius_mm must be a number > 0";
-    if (!finite(feed_mm_min) || feed_mm_min <= 0.0) return "feed_mm_min must be a number > 0";
-    if (!finite(feed_in_mm) || feed_in_mm <= 0.0) return "feed_in_mm must be a number > 0";
+    namespace lim = limits;
+    auto bad = [](const char* key, const std::string& why) { return why.empty() ? why : key + (" " + why); };
+    if (auto why = bad("radius_mm", lim::check_above(radius_mm, 0.0, lim::kLength_mm, "mm")); !why.empty()) return why;
+    if (auto why = bad("feed_mm_min", lim::check_in(feed_mm_min, lim::kFeedMin_mm_min, lim::kFeedMax_mm_min, "mm/min"));
+        !why.empty())
+        return why;
+    if (auto why = bad("feed_in_mm", lim::check_above(feed_in_mm, 0.0, lim::kSmallLength_mm, "mm")); !why.empty())
+        return why;
     if (feed_in_mm >= radius_mm) return "feed_in_mm must be smaller than radius_mm";
-    for (double c : centre_mm)
-        if (!finite(c)) return "centre_mm must hold three numbers";
+    for (std::size_t i = 0; i < centre_mm.size(); ++i)
+        if (auto why = lim::check_in(centre_mm[i], -lim::kPosition_mm, lim::kPosition_mm, "mm"); !why.empty())
+            return "centre_mm[" + std::to_string(i) + "] " + why;
     if (runs.empty()) return "runs must list at least one run";
     for (std::size_t i = 0; i < runs.size(); ++i) {
         const RunSpec& r = runs[i];
         const std::string where = "runs[" + std::to_string(i) + "]: ";
-        if (!finite(r.start_deg)) return where + "start_deg must be a number";
-        if (!finite(r.overshoot_deg) || r.overshoot_deg < 0.0 || r.overshoot_deg > 360.0)
-            return where + "overshoot_deg must be within 0..360";
-        if (!finite(r.data_arc_deg) || r.data_arc_deg < 30.0 || r.data_arc_deg > 360.0)
-            return where + "data_arc_deg must be within 30..360";
+        if (auto why = bad("start_deg", lim::check_in(r.start_deg, -lim::kRotary_deg, lim::kRotary_deg, "deg"));
+            !why.empty())
+            return where + why;
+        if (auto why = bad("overshoot_deg", lim::check_in(r.overshoot_deg, 0.0, 360.0, "deg")); !why.empty())
+            return where + why;
+        if (auto why = bad("data_arc_deg", lim::check_in(r.data_arc_deg, 30.0, 360.0, "deg")); !why.empty())
+            return where + why;
     }
     return {};
 }

@@ -9,12 +9,19 @@
 namespace ballbar::analysis {
 namespace {
 
+std::string fmt(double v, int decimals);
+
 /// Appends " <letter><value>" in fixed notation with `decimals` digits (nc_program.hpp: the text of
 /// std::to_chars at a fraction of its cost; it runs for every axis word of every output block).
 void append_number(std::string& out, char letter, double value, int decimals = 4) {
     append_nc_number(out, letter, value, decimals);
 }
+/// An inverse-time feed (G93 F, 1/min) with up to 10 significant digits: in the F word's format only
+/// between 0.0001 and 999999.9 (no exponent, at most 6 integer digits).
 void append_general(std::string& out, char letter, double value) {
+    if (!(value >= 1e-4 && value <= 999'999.9))
+        throw AnalysisError(std::string("NC word ") + letter + ": inverse-time feed " + fmt(value, 6) +
+                            " does not fit the controller's word format (0.0001 to 999999.9)");
     char buf[64];
     buf[0] = ' ';
     buf[1] = letter;
@@ -102,6 +109,19 @@ NcCompensateSummary compensate_nc_program(std::string_view text, const MachineGe
     NcStep st;
     NcFrame frame = iopt.tcp_at_start ? NcFrame::Tcp : NcFrame::Joint;
     bool end_by_percent = false;
+    // Every number written is in the controller's word format, or the block's line is named.
+    auto word = [&](char letter, double value, int decimals, bool inverse_time = false) {
+        try {
+            if (inverse_time)
+                append_general(out, letter, value);
+            else
+                append_number(out, letter, value, decimals);
+        } catch (const NcError&) {
+            throw;
+        } catch (const AnalysisError& error) {
+            throw NcError(st.line, std::string(error.what()) + " (the compensated block)");
+        }
+    };
     while (in.next(st)) {
         if (!st.verbatim.empty()) {
             out += st.verbatim;
@@ -222,20 +242,20 @@ NcCompensateSummary compensate_nc_program(std::string_view text, const MachineGe
             // The line: [N] G0/G1 X Y Z A C|B [words] [F] [(comment)] (words and comment on the first chord).
             if (k == 0 && !st.sequence.empty()) out.append(st.sequence).append(" ");
             out += st.motion == NcMotion::Rapid ? "G0" : "G1";
-            append_number(out, 'X', q.X_mm, dec);
-            append_number(out, 'Y', q.Y_mm, dec);
-            append_number(out, 'Z', q.Z_mm, dec);
-            append_number(out, 'A', sign * rad_to_deg(q.A_rad), dec);
+            word('X', q.X_mm, dec);
+            word('Y', q.Y_mm, dec);
+            word('Z', q.Z_mm, dec);
+            word('A', sign * rad_to_deg(q.A_rad), dec);
             if (second_is_c)
-                append_number(out, 'C', sign * rad_to_deg(q.C_rad), dec);
+                word('C', sign * rad_to_deg(q.C_rad), dec);
             else
-                append_number(out, 'B', sign * rad_to_deg(q.B_rad), dec);
+                word('B', sign * rad_to_deg(q.B_rad), dec);
             if (k == 0 && !st.words.empty()) out.append(" ").append(st.words);
             if (st.motion == NcMotion::Feed && st.feed) {
                 if (st.inverse_time)
-                    append_general(out, 'F', *st.feed * static_cast<double>(n));  // each chord takes 1/n of the time
+                    word('F', *st.feed * static_cast<double>(n), 0, true);  // each chord takes 1/n of the time
                 else if (k == 0)
-                    append_number(out, 'F', *st.feed, 1);
+                    word('F', *st.feed, 1);
             }
             if (k == 0 && !st.comment.empty()) out.append(" (").append(st.comment).append(")");
             out += '\n';

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/analysis/nc_program.hpp"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <charconv>
@@ -8,6 +9,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+
+#include "ballbar/analysis/limits.hpp"
 
 namespace ballbar::analysis {
 namespace {
@@ -148,26 +151,67 @@ bool fixed_digits(double value, int decimals, std::uint64_t& int_part, std::uint
     return true;
 }
 
+/// What a word of `letter` may hold (the controller's word format).
+struct NcWordRange {
+    std::uint64_t max_integer = 99'999;  ///< largest integer part
+    bool negative = true;                ///< negative values allowed
+    bool positive = false;               ///< must be > 0 once written (a feed)
+};
+
+NcWordRange nc_word_range(char letter, int /*decimals*/) {
+    if (letter == 'F') return {999'999, false, true};
+    if (letter == 'P') return {99'999'999, false, false};
+    return {};
+}
+
 }  // namespace
 
+std::string nc_word_problem(char letter, double value, int decimals) {
+    const NcWordRange r = nc_word_range(letter, decimals);
+    if (decimals < 0 || decimals > 8)
+        return std::string("NC word ") + letter + ": " + std::to_string(decimals) + " decimals (the format has 0 to 8)";
+    std::uint64_t int_part = 0, frac_part = 0;
+    const bool fits =
+        std::isfinite(value) && std::abs(value) < 1e15 && fixed_digits(value, decimals, int_part, frac_part);
+    const bool zero = int_part == 0 && frac_part == 0;
+    const bool negative = std::signbit(value) && !zero;
+    if (fits && int_part <= r.max_integer && (r.negative || !negative) && !(r.positive && (zero || negative)))
+        return {};
+    std::string why = std::string("NC word ") + letter + ": " + limits::number_text(value) + " ";
+    if (!std::isfinite(value)) return why + "is not a finite number";
+    why += "does not fit the controller's word format (";
+    const std::string max = std::to_string(r.max_integer) +
+                            (decimals > 0 ? "." + std::string(static_cast<std::size_t>(decimals), '9') : std::string());
+    if (r.positive)
+        why += "0 < " + std::string(1, letter) + " <= " + max + ", written with " + std::to_string(decimals) +
+               " decimal" + (decimals == 1 ? "" : "s");
+    else if (!r.negative)
+        why += "0 <= " + std::string(1, letter) + " <= " + max;
+    else
+        why += "|" + std::string(1, letter) + "| <= " + max;
+    return why + ")";
+}
+
 void append_nc_number(std::string& out, char letter, double value, int decimals) {
-    char buf[352];  // the longest finite double in fixed notation fits
+    const NcWordRange r = nc_word_range(letter, decimals);
+    char buf[64];
     buf[0] = ' ';
     buf[1] = letter;
     char* p = buf + 2;
     std::uint64_t int_part = 0, frac_part = 0;
-    if (fixed_digits(value, decimals, int_part, frac_part)) {
-        if (std::signbit(value)) *p++ = '-';
-        p = std::to_chars(p, buf + sizeof buf, int_part).ptr;
-        if (decimals > 0) {
-            *p++ = '.';
-            for (int k = decimals - 1; k >= 0; --k, frac_part /= 10) p[k] = static_cast<char>('0' + frac_part % 10);
-            p += decimals;
-        }
-    } else {
-        const auto res = std::to_chars(p, buf + sizeof buf, value, std::chars_format::fixed, decimals);
-        if (res.ec != std::errc()) throw AnalysisError("NC program: axis value out of range");
-        p = res.ptr;
+    // Every word is finite and within its format: X/Y/Z/A/B/C/I/J/K/R at most 5 integer digits, F
+    // positive (not rounded to zero) with at most 6, P not negative with at most 8 (docs/cli.md).
+    if (decimals < 0 || decimals > 8 || !fixed_digits(value, decimals, int_part, frac_part) || int_part > r.max_integer)
+        throw AnalysisError(nc_word_problem(letter, value, decimals));
+    const bool zero = int_part == 0 && frac_part == 0;
+    if ((r.positive && (zero || std::signbit(value))) || (!r.negative && std::signbit(value) && !zero))
+        throw AnalysisError(nc_word_problem(letter, value, decimals));
+    if (std::signbit(value) && r.negative) *p++ = '-';  // (F and P: only a zero gets here with its sign)
+    p = std::to_chars(p, buf + sizeof buf, int_part).ptr;
+    if (decimals > 0) {
+        *p++ = '.';
+        for (int k = decimals - 1; k >= 0; --k, frac_part /= 10) p[k] = static_cast<char>('0' + frac_part % 10);
+        p += decimals;
     }
     out.append(buf, static_cast<std::size_t>(p - buf));  // (pointer, length): the iterator pair goes through replace()
 }
@@ -379,6 +423,10 @@ void write_nc_block(std::string& out, const NcBlock& b, NcDialect dialect) {
             out += "G1";
             break;
         case NcMotion::Dwell:
+            if (!(b.dwell_s >= 0 && b.dwell_s <= kMaxDwell_s))
+                throw AnalysisError("G4 dwell " + limits::number_text(b.dwell_s) + " s" +
+                                    (b.line > 0 ? " (line " + std::to_string(b.line) + ")" : std::string()) +
+                                    " does not fit the controller's P word (0 to 99999.999 s)");
             out += "G4";
             if (fanuc)
                 append_number(out, 'P', std::round(b.dwell_s * 1000.0), 0);

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ballbar/analysis/limits.hpp"
 #include "ballbar/device/emulator.hpp"
 
 namespace ballbar::device {
@@ -34,6 +35,15 @@ double num(const json& obj, const std::string& where, const char* key, double fa
     return v.get<double>();
 }
 
+/// A number within its documented range (docs/emulator.md, "Ranges"), or the default when absent.
+double num_in(const json& obj, const std::string& where, const char* key, double fallback, double lo, double hi,
+              std::string_view unit) {
+    const double v = num(obj, where, key, fallback);
+    if (const std::string why = analysis::limits::check_in(v, lo, hi, unit); !why.empty())
+        throw std::invalid_argument("emulator config: " + where + "." + key + " " + why);
+    return v;
+}
+
 std::string str(const json& obj, const std::string& where, const char* key, const std::string& fallback) {
     if (!obj.contains(key)) return fallback;
     const auto& v = obj.at(key);
@@ -47,7 +57,14 @@ analysis::Vec3 vec3(const json& obj, const std::string& where, const char* key, 
     if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number()) {
         fail(where + "." + key, "must be an array of three numbers [x, y, z] in mm");
     }
-    return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+    const analysis::Vec3 out(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    for (int i = 0; i < 3; ++i) {
+        if (const std::string why = analysis::limits::check_in(out[i], -analysis::limits::kPosition_mm,
+                                                               analysis::limits::kPosition_mm, "mm");
+            !why.empty())
+            throw std::invalid_argument("emulator config: " + where + "." + key + "[" + std::to_string(i) + "] " + why);
+    }
+    return out;
 }
 
 void parse_instrument(const json& j, InstrumentModel& m) {
@@ -68,9 +85,8 @@ void parse_instrument(const json& j, InstrumentModel& m) {
         fail(w + ".calibration_date", "must be a date YYYY-MM-DD (or \"\")");
     if (!(m.calibrated_length_mm > 0 && m.calibrated_length_mm < 4000))
         fail(w + ".calibrated_length_mm", "must be in (0, 4000)");
-    m.noise_um = num(j, w, "noise_um", m.noise_um);
-    if (!(m.noise_um >= 0)) fail(w + ".noise_um", "must not be negative");
-    m.zero_offset_um = num(j, w, "zero_offset_um", m.zero_offset_um);
+    m.noise_um = num_in(j, w, "noise_um", m.noise_um, 0, 1000, "um");
+    m.zero_offset_um = num_in(j, w, "zero_offset_um", m.zero_offset_um, -1000, 1000, "um");
     const double rate = num(j, w, "sample_rate_hz", m.sample_rate_hz);
     if (!(rate >= 1 && rate <= 5000) || rate != std::floor(rate))
         fail(w + ".sample_rate_hz", "must be an integer 1..5000");
@@ -78,24 +94,33 @@ void parse_instrument(const json& j, InstrumentModel& m) {
     const double avg = num(j, w, "averaging", m.averaging);
     if (!(avg >= 1 && avg <= 64) || avg != std::floor(avg)) fail(w + ".averaging", "must be an integer 1..64");
     m.averaging = static_cast<std::uint8_t>(avg);
-    m.temp_start_C = num(j, w, "temp_start_C", m.temp_start_C);
-    m.temp_drift_C_per_h = num(j, w, "temp_drift_C_per_h", m.temp_drift_C_per_h);
-    m.temp_ripple_C = num(j, w, "temp_ripple_C", m.temp_ripple_C);
-    m.temp_ripple_period_s = num(j, w, "temp_ripple_period_s", m.temp_ripple_period_s);
-    m.battery_start_pct = num(j, w, "battery_start_pct", m.battery_start_pct);
-    m.battery_drain_pct_per_h = num(j, w, "battery_drain_pct_per_h", m.battery_drain_pct_per_h);
-    m.watchdog_s = num(j, w, "watchdog_s", m.watchdog_s);
+    namespace lim = analysis::limits;
+    m.temp_start_C = num_in(j, w, "temp_start_C", m.temp_start_C, lim::kTempMin_C, lim::kTempMax_C, "C");
+    m.temp_drift_C_per_h = num_in(j, w, "temp_drift_C_per_h", m.temp_drift_C_per_h, -100, 100, "C/h");
+    m.temp_ripple_C = num_in(j, w, "temp_ripple_C", m.temp_ripple_C, 0, 100, "C");
+    m.temp_ripple_period_s = num_in(j, w, "temp_ripple_period_s", m.temp_ripple_period_s, 0.001, 1e6, "s");
+    m.battery_start_pct = num_in(j, w, "battery_start_pct", m.battery_start_pct, 0, 100, "%");
+    m.battery_drain_pct_per_h = num_in(j, w, "battery_drain_pct_per_h", m.battery_drain_pct_per_h, 0, 1000, "%/h");
+    m.watchdog_s = num_in(j, w, "watchdog_s", m.watchdog_s, 0, 3600, "s");
 }
 
 analysis::Pose parse_pose(const json& j, const std::string& w, const analysis::Pose& fallback) {
     only_keys(j, w, {"X_mm", "Y_mm", "Z_mm", "A_deg", "B_deg", "C_deg"});
     analysis::Pose p;
-    p.X_mm = num(j, w, "X_mm", fallback.X_mm);
-    p.Y_mm = num(j, w, "Y_mm", fallback.Y_mm);
-    p.Z_mm = num(j, w, "Z_mm", fallback.Z_mm);
-    p.A_rad = analysis::deg_to_rad(num(j, w, "A_deg", analysis::rad_to_deg(fallback.A_rad)));
-    p.B_rad = analysis::deg_to_rad(num(j, w, "B_deg", analysis::rad_to_deg(fallback.B_rad)));
-    p.C_rad = analysis::deg_to_rad(num(j, w, "C_deg", analysis::rad_to_deg(fallback.C_rad)));
+    namespace lim = analysis::limits;
+    auto mm = [&](const char* key, double fb) {
+        return num_in(j, w, key, fb, -lim::kPosition_mm, lim::kPosition_mm, "mm");
+    };
+    auto deg = [&](const char* key, double fb_rad) {
+        return analysis::deg_to_rad(
+            num_in(j, w, key, analysis::rad_to_deg(fb_rad), -lim::kRotary_deg, lim::kRotary_deg, "deg"));
+    };
+    p.X_mm = mm("X_mm", fallback.X_mm);
+    p.Y_mm = mm("Y_mm", fallback.Y_mm);
+    p.Z_mm = mm("Z_mm", fallback.Z_mm);
+    p.A_rad = deg("A_deg", fallback.A_rad);
+    p.B_rad = deg("B_deg", fallback.B_rad);
+    p.C_rad = deg("C_deg", fallback.C_rad);
     return p;
 }
 
@@ -130,6 +155,8 @@ void parse_errors(const json& j, analysis::ErrorParams& e) {
             }
         }
         e[*param] = value.get<double>() * scale;
+        if (const std::string why = analysis::limits::check_param(*param, e[*param]); !why.empty())
+            fail(w, name + " " + why);
     }
 }
 
@@ -150,9 +177,8 @@ void parse_machine(const json& j, MachineSetup& m) {
     m.socket_mm = vec3(j, w, "socket_mm", m.socket_mm);
     m.socket_offset_mm = vec3(j, w, "socket_offset_mm", m.socket_offset_mm);
     if (j.contains("start")) m.start = parse_pose(j.at("start"), w + ".start", m.start);
-    m.rapid_mm_min = num(j, w, "rapid_mm_min", m.rapid_mm_min);
-    m.rapid_deg_min = num(j, w, "rapid_deg_min", m.rapid_deg_min);
-    if (!(m.rapid_mm_min > 0 && m.rapid_deg_min > 0)) fail(w, "rapid speeds must be positive");
+    m.rapid_mm_min = num_in(j, w, "rapid_mm_min", m.rapid_mm_min, 1, 1e6, "mm/min");
+    m.rapid_deg_min = num_in(j, w, "rapid_deg_min", m.rapid_deg_min, 1, 1e6, "deg/min");
     if (j.contains("errors")) parse_errors(j.at("errors"), m.errors);
 }
 
@@ -165,21 +191,22 @@ void parse_faults(const json& j, FaultConfig& f) {
     f.drop_frame_probability = num(j, w, "drop_frame_probability", f.drop_frame_probability);
     f.corrupt_byte_probability = num(j, w, "corrupt_byte_probability", f.corrupt_byte_probability);
     f.replay_frame_probability = num(j, w, "replay_frame_probability", f.replay_frame_probability);
-    f.start_delay_s = num(j, w, "start_delay_s", f.start_delay_s);
+    f.start_delay_s = num_in(j, w, "start_delay_s", f.start_delay_s, 0, 3600, "s");
     f.feed_override = num(j, w, "feed_override", f.feed_override);
     f.answer_delay_s = num(j, w, "answer_delay_s", f.answer_delay_s);
-    if (!(f.start_delay_s >= 0)) fail(w + ".start_delay_s", "must not be negative");
     if (!(f.answer_delay_s >= 0 && f.answer_delay_s <= 3600)) fail(w + ".answer_delay_s", "must be in [0, 3600]");
     if (!(f.feed_override >= 0.1 && f.feed_override <= 2.0)) fail(w + ".feed_override", "must be in [0.1, 2]");
-    for (double pr : {f.drop_frame_probability, f.corrupt_byte_probability, f.replay_frame_probability}) {
-        if (!(pr >= 0 && pr <= 1)) fail(w, "probabilities must be in [0, 1]");
+    for (const auto& [key, pr] : {std::pair{"drop_frame_probability", f.drop_frame_probability},
+                                  std::pair{"corrupt_byte_probability", f.corrupt_byte_probability},
+                                  std::pair{"replay_frame_probability", f.replay_frame_probability}}) {
+        if (!(pr >= 0 && pr <= 1)) fail(w + "." + key, "probabilities must be in [0, 1]");
     }
-    f.stall_at_s = num(j, w, "stall_at_s", f.stall_at_s);
-    f.stall_s = num(j, w, "stall_s", f.stall_s);
-    f.disconnect_at_s = num(j, w, "disconnect_at_s", f.disconnect_at_s);
-    f.disconnect_s = num(j, w, "disconnect_s", f.disconnect_s);
-    f.reply_delay_ms = num(j, w, "reply_delay_ms", f.reply_delay_ms);
-    if (f.stall_s < 0 || f.disconnect_s < 0 || f.reply_delay_ms < 0) fail(w, "durations must not be negative");
+    // Times of the session's clock; -1 (or any negative time) means never.
+    f.stall_at_s = num_in(j, w, "stall_at_s", f.stall_at_s, -1e9, 1e9, "s");
+    f.stall_s = num_in(j, w, "stall_s", f.stall_s, 0, 1e6, "s");
+    f.disconnect_at_s = num_in(j, w, "disconnect_at_s", f.disconnect_at_s, -1e9, 1e9, "s");
+    f.disconnect_s = num_in(j, w, "disconnect_s", f.disconnect_s, 0, 1e6, "s");
+    f.reply_delay_ms = num_in(j, w, "reply_delay_ms", f.reply_delay_ms, 0, 60'000, "ms");
 }
 
 // "continuous": the continuous machine's errors, per axis {"X", "Y", "Z"}, per plane {"XY", "YZ", "ZX"}.

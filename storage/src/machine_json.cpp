@@ -4,6 +4,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "ballbar/analysis/limits.hpp"
+
 namespace ballbar::storage {
 namespace {
 
@@ -27,7 +29,10 @@ analysis::Vec3 vec_from(const json& j, std::string_view key) {
         const auto& e = j[static_cast<std::size_t>(i)];
         if (!e.is_number()) throw FormatError(where + " must be an array of 3 numbers (mm)");
         v[i] = e.get<double>();
-        if (!std::isfinite(v[i])) throw FormatError(where + " must be finite");
+        if (const std::string why =
+                analysis::limits::check_in(v[i], -analysis::limits::kPosition_mm, analysis::limits::kPosition_mm, "mm");
+            !why.empty())
+            throw FormatError(where + "[" + std::to_string(i) + "] " + why);
     }
     return v;
 }
@@ -134,6 +139,10 @@ Instrument instrument_from_json(std::string_view text) {
         if (!it->is_number() || !(it->get<double>() > 0) || !std::isfinite(it->get<double>())) {
             throw FormatError("instrument.calibrated_length_mm must be a positive number (mm)");
         }
+        if (const std::string why =
+                analysis::limits::check_above(it->get<double>(), 0, analysis::limits::kLength_mm, "mm");
+            !why.empty())
+            throw FormatError("instrument.calibrated_length_mm " + why);
         in.calibrated_length_mm = it->get<double>();
         j.erase(it);
     }

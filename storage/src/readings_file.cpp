@@ -12,6 +12,7 @@
 
 #include "ballbar/analysis/decimal_text.hpp"
 #include "ballbar/analysis/kinematics.hpp"
+#include "ballbar/analysis/limits.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
 namespace ballbar::storage {
@@ -149,6 +150,43 @@ enum class Col {
     std_mm,
     count
 };
+
+/// The physical range of a number column (docs/formats/readings.md, "Ranges"); integer columns are
+/// checked where they are read.
+struct ColumnRange {
+    double lo, hi;
+    const char* unit;
+    bool above_lo = false;  ///< lo itself is outside (a length must be > 0)
+};
+
+ColumnRange range_of(Col c) {
+    namespace lim = analysis::limits;
+    switch (c) {
+        case Col::X:
+        case Col::Y:
+        case Col::Z:
+        case Col::sx:
+        case Col::sy:
+        case Col::sz:
+            return {-lim::kPosition_mm, lim::kPosition_mm, "mm"};
+        case Col::rot1:
+        case Col::rot2:
+            return {-lim::kRotary_deg, lim::kRotary_deg, "deg"};
+        case Col::measured:
+        case Col::nominal:
+            return {0, lim::kLength_mm, "mm", true};
+        case Col::time:
+            return {-lim::kTime_s, lim::kTime_s, "s"};
+        case Col::bar_temp:
+        case Col::air_temp:
+        case Col::machine_temp:
+            return {lim::kTempMin_C, lim::kTempMax_C, "C"};
+        case Col::std_mm:
+            return {0, lim::kSmallLength_mm, "mm"};
+        default:
+            return {-2e9, 2e9, ""};  // integers: their own ranges
+    }
+}
 
 struct ColumnSpec {
     Col col;
@@ -383,6 +421,10 @@ ReadingsFile parse_readings(std::string_view text) {
                 throw ReadingsFileError(
                     lineno, "column \"" + name_of(c) + "\": \"" + std::string(*f) + "\" is not a finite number");
             }
+            const ColumnRange r = range_of(c);
+            const std::string why = r.above_lo ? analysis::limits::check_above(*v, r.lo, r.hi, r.unit)
+                                               : analysis::limits::check_in(*v, r.lo, r.hi, r.unit);
+            if (!why.empty()) throw ReadingsFileError(lineno, "column \"" + name_of(c) + "\" " + why);
             return v;
         };
         auto integer = [&](Col c, int min, int max) -> std::optional<int> {
@@ -404,21 +446,15 @@ ReadingsFile parse_readings(std::string_view text) {
         set_rotary(r.pose, rot.second, *number(Col::rot2));
         r.socket_mm = {*number(Col::sx), *number(Col::sy), *number(Col::sz)};
         r.measured_mm = *number(Col::measured);
-        if (!(r.measured_mm > 0)) throw ReadingsFileError(lineno, "measured_mm must be a positive length");
         r.time_s = number(Col::time).value_or(0.0);
         r.bar_temp_C = number(Col::bar_temp);
         r.air_temp_C = number(Col::air_temp);
         r.machine_temp_C = number(Col::machine_temp);
-        for (const auto& [c, t] : {std::pair{Col::bar_temp, r.bar_temp_C}, std::pair{Col::air_temp, r.air_temp_C},
-                                   std::pair{Col::machine_temp, r.machine_temp_C}}) {
-            if (t && *t < -273.15) throw ReadingsFileError(lineno, name_of(c) + " is below absolute zero");
-        }
         r.location = integer(Col::location, 0, 1'000'000).value_or(-1);
         r.point = integer(Col::point, 0, 1'000'000'000).value_or(-1);
         r.step = integer(Col::step, 1, 2).value_or(0);
         r.n = integer(Col::n, 1, 2'000'000'000).value_or(0);
         r.std_mm = number(Col::std_mm);
-        if (r.std_mm && *r.std_mm < 0) throw ReadingsFileError(lineno, "std_mm must not be negative");
 
         const double nominal = analysis::nominal_length(out.set.machine, r.pose, r.socket_mm);
         if (const auto given = number(Col::nominal); given && std::abs(*given - nominal) > kNominalTolerance_mm) {

@@ -5,11 +5,13 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "ballbar/analysis/decimal_text.hpp"
+#include "ballbar/analysis/limits.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/sqlite.hpp"
 
@@ -51,8 +53,35 @@ double need_number(const json& j, const char* key) {
     return j[key].get<double>();
 }
 
+/// A key of a test header object that the format does not have is refused: a misspelt key would
+/// otherwise describe a test that was not run.
+void only_keys(const json& j, const std::string& where, std::initializer_list<std::string_view> allowed) {
+    for (const auto& item : j.items()) {
+        bool known = false;
+        for (const std::string_view k : allowed) known = known || item.key() == k;
+        if (known) continue;
+        std::string list;
+        for (const std::string_view k : allowed) list.append(list.empty() ? "" : ", ").append(k);
+        throw std::runtime_error(where + "unknown key \"" + item.key() + "\" (known: " + list + ")");
+    }
+}
+
+/// A number column's range (docs/formats/trace.md, "Ranges").
+std::string column_problem(std::string_view column, double v) {
+    namespace lim = analysis::limits;
+    std::string why;
+    if (column == "time_s")
+        why = lim::check_in(v, -lim::kTime_s, lim::kTime_s, "s");
+    else if (column == "measured_mm")
+        why = lim::check_above(v, 0, lim::kLength_mm, "mm");
+    else
+        why = lim::check_in(v, lim::kTempMin_C, lim::kTempMax_C, "C");
+    return why.empty() ? why : std::string(column) + " " + why;
+}
+
 circ::TestSpec test_from_json(const json& j) {
     if (!j.is_object()) throw std::runtime_error("must be a JSON object");
+    only_keys(j, "", {"kind", "plane", "radius_mm", "centre_mm", "feed_mm_min", "feed_in_mm", "runs"});
     if (!j.contains("kind") || j["kind"] != "circular")
         throw std::runtime_error("\"kind\" must be \"circular\" (the only kind of this version)");
     circ::TestSpec t;
@@ -76,6 +105,7 @@ circ::TestSpec test_from_json(const json& j) {
         const json& r = j["runs"][i];
         const std::string where = "runs[" + std::to_string(i) + "]: ";
         if (!r.is_object()) throw std::runtime_error(where + "must be an object");
+        only_keys(r, where, {"direction", "start_deg", "overshoot_deg", "data_arc_deg"});
         circ::RunSpec run;
         if (!r.contains("direction") || !r["direction"].is_string())
             throw std::runtime_error(where + "needs \"direction\": ccw or cw");
@@ -262,6 +292,8 @@ TraceFile parse_trace(std::string_view text) {
             throw TraceFileError(
                 no, "measured_mm \"" + std::string(fields[static_cast<std::size_t>(c_len)]) + "\" is not a number");
         if (*m <= 0.0) throw TraceFileError(no, "measured_mm must be > 0");
+        for (const auto& [name, v] : {std::pair{"time_s", *t}, std::pair{"measured_mm", *m}})
+            if (const std::string why = column_problem(name, v); !why.empty()) throw TraceFileError(no, why);
         if (!out.samples.empty() && !(*t > out.samples.back().time_s))
             throw TraceFileError(no, "time_s " + shortest(*t) + " is not after the previous row's (" +
                                          shortest(out.samples.back().time_s) + "): it must strictly increase");
@@ -272,6 +304,7 @@ TraceFile parse_trace(std::string_view text) {
             if (f.empty()) return into.push_back(std::nullopt);
             const auto v = parse_number(f);
             if (!v) throw TraceFileError(no, std::string(name) + " \"" + std::string(f) + "\" is not a number");
+            if (const std::string why = column_problem(name, *v); !why.empty()) throw TraceFileError(no, why);
             into.push_back(v);
         };
         temp(c_bar, out.bar_temp_C, "bar_temp_C");

@@ -216,12 +216,21 @@ TEST(Plan, RefusesZeroRotationAndShortDwell) {
 TEST(Plan, ConditioningLimitIsEnforced) {
     const MachineFile m = seed_machine(MachineType::RRTTT);
     PlanSpec s = default_plan(m);
-    s.max_condition = 0.5;  // nothing satisfies this: every layout has condition number >= 1
+    s.layout = LayoutKind::FourPoint;  // its condition number is above 1: the least a layout can have
+    s.max_condition = 1.0;
     try {
         make_plan(m, s);
         FAIL();
     } catch (const PlanError& e) {
-        EXPECT_NE(std::string(e.what()).find("condition number"), std::string::npos);
+        EXPECT_NE(std::string(e.what()).find("condition number"), std::string::npos) << e.what();
+    }
+    s.max_condition = 0.5;  // below any layout's: refused as out of its range
+    try {
+        make_plan(m, s);
+        FAIL();
+    } catch (const PlanError& e) {
+        EXPECT_NE(std::string(e.what()).find("max_condition = 0.5 is outside [1, 1000000]"), std::string::npos)
+            << e.what();
     }
 }
 

@@ -195,15 +195,16 @@ TEST(NcProgram, WritesFixedDecimalsLikePrintf) {
     b.motion = ba::NcMotion::Feed;
     b.X_mm = 1.23456;
     b.Y_mm = -0.00004;  // rounds to zero and keeps its sign, as printf's %.4f does
-    b.Z_mm = 123456.5;
+    b.Z_mm = 12345.5;
     b.feed_mm_min = 1500.04;
     p.blocks = {b};
     const std::string out = ba::write_nc_program(p);
-    EXPECT_NE(out.find("G1 X1.2346 Y-0.0000 Z123456.5000 F1500.0\n"), std::string::npos) << out;
+    EXPECT_NE(out.find("G1 X1.2346 Y-0.0000 Z12345.5000 F1500.0\n"), std::string::npos) << out;
 }
 
-// append_nc_number is std::to_chars(fixed) at a fraction of its cost: the same text for every value,
-// ties (k / 2^j, exactly halfway at some decimal) and signed zeros included.
+// append_nc_number is std::to_chars(fixed) at a fraction of its cost: the same text for every value
+// in the controller's word format (at most 5 integer digits for X), ties (k / 2^j, exactly halfway at
+// some decimal) and signed zeros included; every other value is refused (nc_program.hpp).
 TEST(NcProgram, NumbersAreTheTextOfToCharsFixed) {
     std::mt19937_64 rng(17);
     std::vector<double> values{0.0,
@@ -237,7 +238,15 @@ TEST(NcProgram, NumbersAreTheTextOfToCharsFixed) {
             buf[0] = ' ';
             buf[1] = 'X';
             const auto res = std::to_chars(buf + 2, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+            const std::string text(buf + 2, res.ptr);
+            const std::size_t sign = text[0] == '-' ? 1 : 0;
+            const bool fits = std::isfinite(v) && std::min(text.find('.'), text.size()) - sign <= 5;
             std::string out = "G1";
+            if (!fits) {
+                ASSERT_THROW(ba::append_nc_number(out, 'X', v, decimals), ba::AnalysisError) << v;
+                ASSERT_EQ(out, "G1") << "nothing of a refused word is written";
+                continue;
+            }
             ba::append_nc_number(out, 'X', v, decimals);
             ASSERT_EQ(out, "G1" + std::string(buf, res.ptr)) << v << " with " << decimals << " decimals";
         }

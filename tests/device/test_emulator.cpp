@@ -438,7 +438,7 @@ TEST(Config, ParsesEverySectionAndRejectsMistakes) {
     fails_naming(R"({"machine": {"errors": {"EXX_ppm": 1}}})", "EXX_ppm");
     fails_naming(R"({"machine": {"errors": {"X0C_deg": 1}}})", "X0C_deg");
     fails_naming(R"({"machine": {"type": "XYZ"}})", "type");
-    fails_naming(R"({"faults": {"drop_frame_probability": 2}})", "probabilities");
+    fails_naming(R"({"faults": {"drop_frame_probability": 2}})", "drop_frame_probability");
     fails_naming(R"({"instrumnet": {}})", "instrumnet");
     fails_naming(R"({"program": {"text": "G2 X1\n"}})", "line 1");
     fails_naming(R"({)", "not valid JSON");

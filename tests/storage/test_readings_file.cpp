@@ -148,7 +148,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Invalid{"unclosed_quote.csv", 5, "quoted field is not closed"},
                       Invalid{"bad_step.csv", 5, "column \"step\": 3 is not an integer in [1, 2]"},
                       Invalid{"fractional_location.csv", 4, "\"location\": 1.5 is not an integer"},
-                      Invalid{"negative_measured.csv", 4, "measured_mm must be a positive length"},
+                      Invalid{"negative_measured.csv", 4, "column \"measured_mm\" = -100.0021 must be > 0"},
                       Invalid{"empty_required.csv", 4, "column \"Z_mm\" is empty"},
                       Invalid{"no_rows.csv", 4, "no readings"},
                       Invalid{"header_after_columns.csv", 5, "header line after the column row"},

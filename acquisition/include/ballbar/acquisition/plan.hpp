@@ -60,6 +60,15 @@ struct PlanSpec {
     Answers answers;
 };
 
+/// The plan's ranges (docs/procedure.md, "The plan file"): capture windows of 0.01–60 s, a dwell of
+/// at least two windows and at most an hour, at most 100 retries.
+inline constexpr double kMinWindow_s = 0.01, kMaxWindow_s = 60, kMaxPlanDwell_s = 3600;
+inline constexpr int kMaxRetries = 100;
+
+/// Refuses a spec with a value outside its range, naming the field after `what` ("plan file: dwell_s
+/// = 0.6 s: it must be at least two capture windows ..."). Throws PlanError.
+void check_plan_spec(const PlanSpec& spec, const std::string& what);
+
 /// Parses a plan file for a machine of `type` (the rotation keys depend on it). Throws PlanError.
 PlanSpec parse_plan_file(std::string_view json_text, analysis::MachineType type);
 std::string write_plan_file(const PlanSpec& spec, analysis::MachineType type);

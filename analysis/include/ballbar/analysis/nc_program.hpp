@@ -78,11 +78,18 @@ void write_nc_header(std::string& out, NcDialect dialect, std::string_view title
 void write_nc_block(std::string& out, const NcBlock& block, NcDialect dialect);
 void write_nc_footer(std::string& out, NcDialect dialect);
 
-/// Appends " <letter><value>" with `decimals` digits after the point: exactly the text of
+/// Appends " <letter><value>" with `decimals` (0..8) digits after the point: exactly the text of
 /// std::to_chars(value, std::chars_format::fixed, decimals) (the exact binary value rounded to
-/// nearest, ties to even; "-" on negative values, zero included), at a fraction of its cost for
-/// decimals in 0..8 and the magnitudes of NC words. Throws AnalysisError when it does not fit.
+/// nearest, ties to even; "-" on negative values, zero included), at a fraction of its cost.
+/// Every word is in the controller's word format or refused: finite; X Y Z A B C I J K R at most 5
+/// integer digits (|value| < 100000); F positive and not rounded to zero, at most 6 (999999.9);
+/// P not negative, at most 8. Throws AnalysisError (nc_word_problem's reason) otherwise.
 void append_nc_number(std::string& out, char letter, double value, int decimals);
+/// Empty when append_nc_number(letter, value, decimals) would write the word; otherwise why not
+/// ("NC word F: 1e-300 does not fit the controller's word format (> 0 to 999999.9, ...)").
+std::string nc_word_problem(char letter, double value, int decimals);
+/// The longest dwell a G4 takes, s (Fanuc: P in ms, at most 8 digits).
+inline constexpr double kMaxDwell_s = 99'999.999;
 
 /// The absolute commanded pose after `block` (the axes it does not name keep their `before` values).
 Pose pose_after(const NcBlock& block, const Pose& before);
