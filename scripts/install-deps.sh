@@ -9,6 +9,7 @@ packages=(
   # libraries the product links
   libeigen3-dev        # analysis: kinematics, SSM, identification (the only dependency of analysis/)
   libsqlite3-dev       # storage: every session in one SQLite file
+  nettle-dev           # storage: SHA-256 of imported files (duplicate imports are recognised)
   libusb-1.0-0-dev     # device: vendor-class USB bulk link
   libhidapi-dev        # device: USB HID link (hidraw backend)
   libserialport-dev    # device: USB CDC serial link (port enumeration with VID/PID, modem lines)

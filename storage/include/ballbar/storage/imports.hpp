@@ -10,11 +10,26 @@
 #include <string_view>
 #include <vector>
 
+#include <nettle/sha2.h>
+
 #include "ballbar/storage/store.hpp"
 
 namespace ballbar::storage {
 
-/// SHA-256 (FIPS 180-4) of `bytes` as 64 lower-case hex digits.
+/// SHA-256 (FIPS 180-4, computed by libnettle) fed in pieces, so a file can be hashed while it is
+/// streamed.
+class Sha256 {
+public:
+    Sha256();
+    void update(std::string_view bytes);
+    /// The digest of everything fed so far as 64 lower-case hex digits; starts a new hash.
+    std::string hex();
+
+private:
+    sha256_ctx ctx_;
+};
+
+/// SHA-256 of `bytes` as 64 lower-case hex digits.
 std::string sha256_hex(std::string_view bytes);
 
 struct ImportRecord {
