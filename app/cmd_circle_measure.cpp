@@ -658,6 +658,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
                 {"samples", sum.samples},
                 {"pauses", sum.pauses},
                 {"gaps", sum.gaps},
+                {"lost_samples", sum.lost_samples},
                 {"duplicates_dropped", sum.duplicates_dropped},
                 {"dropped_frames", ec.dropped_frames},
                 {"replayed_frames", ec.replayed_frames},

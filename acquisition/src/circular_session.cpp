@@ -165,7 +165,12 @@ bool CircularSession::attempt(int number) {
     const double feed_in_s = test_.feed_in_mm / v;
     std::vector<circ::TraceSample> samples;
     std::vector<std::uint64_t> seqs;
-    std::vector<std::size_t> gaps;          // index of the first sample after each gap
+    struct Hole {
+        std::size_t after;   // index of the first sample after the hole
+        std::uint64_t lost;  // samples missing, by sequence number
+    };
+    std::vector<Hole> holes;                // lost frames
+    std::vector<std::size_t> breaks;        // the device clock went back: never inside a run
     std::vector<std::size_t> out_of_range;  // samples beyond the transducer's range
     std::optional<circ::FeedIn> fi;
     std::size_t run = 0, from = 0, trace_first = 0;
@@ -222,12 +227,13 @@ bool CircularSession::attempt(int number) {
             }
             if (last_seq_ && s.seq != *last_seq_ + 1) {
                 ++summary_.gaps;
-                gaps.push_back(samples.size());
+                summary_.lost_samples += s.seq - *last_seq_ - 1;
+                holes.push_back({samples.size(), s.seq - *last_seq_ - 1});
             }
             last_seq_ = s.seq;
             const double t = static_cast<double>(s.device_time_us) * 1e-6;
             if (!samples.empty() && !(t > samples.back().time_s)) {
-                gaps.push_back(samples.size());  // the device clock went back: a new stream, not one trace
+                breaks.push_back(samples.size());  // the device clock went back: a new stream, not one trace
                 continue;
             }
             if (s.flags & analysis::kSampleOutOfRange) out_of_range.push_back(samples.size());
@@ -295,15 +301,39 @@ bool CircularSession::attempt(int number) {
                              [](double t, const circ::TraceSample& s) { return t < s.time_s; }) -
             samples.begin());
         last = last == 0 ? 0 : last - 1;
-        const auto lost =
-            std::count_if(gaps.begin(), gaps.end(), [&](std::size_t g) { return g > first && g <= last; });
+        // Holes inside the run: a short one loses a few samples, which the analysis does not need; a
+        // long one, or too many samples lost in all, voids the run.
+        const double period_s =
+            last > first ? (samples[last].time_s - samples[first].time_s) / static_cast<double>(last - first) : 0.0;
+        const double max_hole_s = std::max(options_.max_gap_s, 3.0 * period_s);
+        std::size_t long_holes = 0;
+        std::uint64_t lost_in_run = 0;
+        double longest_s = 0;
+        for (const Hole& h : holes) {
+            if (h.after <= first || h.after > last) continue;
+            const double hole_s = samples[h.after].time_s - samples[h.after - 1].time_s;
+            longest_s = std::max(longest_s, hole_s);
+            lost_in_run += h.lost;
+            if (hole_s > max_hole_s) ++long_holes;
+        }
+        const auto broken =
+            std::count_if(breaks.begin(), breaks.end(), [&](std::size_t g) { return g > first && g <= last; });
+        const bool too_many =
+            static_cast<double>(lost_in_run) > options_.max_lost_fraction * static_cast<double>(last - first + 1);
         const auto beyond = std::count_if(out_of_range.begin(), out_of_range.end(),
                                           [&](std::size_t g) { return g >= first && g <= last; });
-        if (lost > 0 || beyond > 0) {
-            const std::string why =
-                run_name(run) +
-                (lost > 0 ? " has " + std::to_string(lost) + " gap" + (lost == 1 ? "" : "s") + " in its stream"
-                          : " left the bar's range in " + std::to_string(beyond) + " samples");
+        if (broken > 0 || long_holes > 0 || too_many || beyond > 0) {
+            std::string why = run_name(run);
+            if (broken > 0)
+                why += " has a restart of the instrument's clock in it";
+            else if (long_holes > 0)
+                why += " has a hole of " + fmt(longest_s * 1e3, 0) + " ms in its stream (at most " +
+                       fmt(max_hole_s * 1e3, 0) + " ms can be bridged)";
+            else if (too_many)
+                why += " lost " + std::to_string(lost_in_run) + " of its " + std::to_string(last - first + 1) +
+                       " samples (at most " + fmt(options_.max_lost_fraction * 100, 1) + " % can be missing)";
+            else
+                why += " left the bar's range in " + std::to_string(beyond) + " samples";
             fire(Event::PointRejected, why);
             return give_up(why);
         }

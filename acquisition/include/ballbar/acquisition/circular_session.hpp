@@ -68,6 +68,14 @@ struct CircularOptions {
     double start_grace_s = 120;
     /// The part program's stand before each feed-in (s).
     double dwell_s = 1.0;
+    /// Lost frames a run may have and still be used: each hole in the stream at most `max_gap_s` of
+    /// device time (or three sample periods of a slow instrument, if longer), and all of a run's holes
+    /// together at most `max_lost_fraction` of its samples. The analysis works on time-stamped samples,
+    /// so a run with a few scattered missing samples is measured as well as a whole one (a hole of 50 ms
+    /// is 0.8 mm of path at 1000 mm/min, under half the shortest cyclic pitch searched); a longer hole
+    /// voids the run.
+    double max_gap_s = 0.050;
+    double max_lost_fraction = 0.05;
     /// The first attempt's number (a resumed session goes on counting).
     int first_attempt = 1;
     /// Set from a SIGINT handler: the session ends Aborted with `interrupted` set.
@@ -82,7 +90,8 @@ struct CircularSummary {
     int attempts = 0;
     std::size_t samples = 0;
     std::size_t duplicates_dropped = 0;
-    std::size_t gaps = 0;
+    std::size_t gaps = 0;            ///< holes in the stream (lost frames), kept or not
+    std::size_t lost_samples = 0;    ///< samples those holes lost, by their sequence numbers
     std::size_t pauses = 0;
     std::optional<CircularAttempt> good;
     std::vector<analysis::circular::TraceSample> trace;  ///< the good attempt's samples
