@@ -237,8 +237,9 @@ TEST(Demo, CompensationFlagsEstimatesMoreThanFiveSigmaFromTheTruth) {
         // Judged against what the plan can identify, the estimate agrees: only noise is left.
         EXPECT_FALSE(off) << line;
         // The common scale EZZ is held at zero, so the fit sees EXX − EZZ and EYY − EZZ (physics, not a bug).
-        if (name == "EXX" || name == "EYY")
+        if (name == "EXX" || name == "EYY") {
             EXPECT_NEAR(p["identifiable_true"].get<double>(), p["true"].get<double>() - 5e-6, 0.05e-6) << name;
+        }
     }
     // Units: no bare numbers in the identification's estimates.
     EXPECT_NE(t.out.find(" µm "), std::string::npos) << t.out;
