@@ -26,6 +26,7 @@
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
+#include "files.hpp"
 #include "gauge_source.hpp"  // demo --instrument: a digital gauge (issue 14)
 #if __has_include("ballbar/report/build.hpp")
 #include "ballbar/report/build.hpp"
@@ -246,6 +247,16 @@ std::string arcsec(const json& angles, const json& std = nullptr) {
 }
 
 int run_demo(const DemoOptions& o, const Globals& globals) {
+    std::vector<fileio::Protected> inputs = database_files(globals);
+    inputs.push_back({o.plan, "plan file"});
+    inputs.push_back({o.faults, "faults file"});
+    if (!o.report.empty()) {
+        try {
+            fileio::check_output(o.report, "--report", inputs);  // before the demo runs
+        } catch (const fileio::FileError& e) {
+            throw cli_error(e);
+        }
+    }
     if (!o.instrument.empty() && o.instrument != "ballbar")
         return run_gauge_demo({o.instrument, o.machine, o.seed, o.gauge_rate_hz, o.json}, resolve_db_path(globals));
     const auto type = ba::parse_machine_type(o.machine);
@@ -410,7 +421,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
 #endif
     if (!o.report.empty()) {
 #ifdef BALLBAR_HAVE_REPORT
-        report::render_pdf(report::build_report(store, id), o.report);
+        write_output(o.report, "--report", report::render_pdf_bytes(report::build_report(store, id)), inputs);
         out["report"] = o.report;
 #else
         throw CliError(kExitFailure, "--report: this build has no report module");

@@ -3,12 +3,14 @@
 // transaction. An invalid file is refused whole (exit 2) with its line number and the problem.
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/storage/trace_file.hpp"
 #include "command.hpp"
+#include "files.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -18,50 +20,52 @@ struct ImportOptions {
     bool json = false;
 };
 
-std::string mismatch_summary(const storage::ReadingsFile& f) {
-    const auto& m = f.nominal_mismatches;
+std::string mismatch_summary(const storage::ImportedReadings& r) {
     std::string lines;
-    double worst = 0;
-    for (std::size_t i = 0; i < m.size(); ++i) {
-        if (i < 10) lines += (i ? ", " : "") + std::to_string(m[i].line);
-        worst = std::max(worst, std::abs(m[i].file_nominal_mm - m[i].computed_nominal_mm));
-    }
-    if (m.size() > 10) lines += ", …";
-    return std::to_string(m.size()) +
+    for (std::size_t i = 0; i < r.first_mismatch_lines.size(); ++i)
+        lines += (i ? ", " : "") + std::to_string(r.first_mismatch_lines[i]);
+    if (r.nominal_mismatches > r.first_mismatch_lines.size()) lines += ", …";
+    return std::to_string(r.nominal_mismatches) +
            " row(s) give a nominal_mm that differs from the length recomputed from the "
            "machine geometry by more than 0.001 mm (largest " +
-           std::to_string(worst) + " mm; lines " + lines +
+           std::to_string(r.worst_mismatch_mm) + " mm; lines " + lines +
            "): the producer's geometry or conventions may disagree with this file's machine header";
 }
 
 int run_import_trace(const ImportOptions& o, const Globals& globals);
 
+/// Streams the file into the database in batches, in one transaction (memory independent of the
+/// file's length); an invalid line anywhere stores nothing.
 int run_import(const ImportOptions& o, const Globals& globals) {
-    if (storage::looks_like_trace(read_file(o.file, "file").substr(0, 64))) return run_import_trace(o, globals);
-    storage::ReadingsFile file;
+    if (storage::looks_like_trace(fileio::read_head(o.file, "file to import", 64))) return run_import_trace(o, globals);
+    std::optional<storage::ReadingsStream> stream;
     try {
-        file = storage::read_readings_file(o.file);
+        stream.emplace(storage::ReadingsStream::open(o.file));
     } catch (const storage::ReadingsFileError& e) {
         throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
     }
-    for (const auto& w : file.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
-    if (!file.nominal_mismatches.empty()) {
-        std::cerr << "ballbar: warning: " << o.file << ": " << mismatch_summary(file) << '\n';
-    }
+    storage::ImportedReadings r;
     try {
         storage::Store store(resolve_db_path(globals));
-        const auto id = storage::import_readings(store, file, o.file);
-        const auto info = store.session(id);
+        try {
+            r = storage::import_readings_stream(store, *stream, o.file);
+        } catch (const storage::ReadingsFileError& e) {
+            throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
+        }
+        for (const auto& w : r.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
+        if (r.nominal_mismatches > 0)
+            std::cerr << "ballbar: warning: " << o.file << ": " << mismatch_summary(r) << '\n';
+        const auto info = store.session(r.session);
         if (o.json) {
-            nlohmann::json j = {{"session", id},
+            nlohmann::json j = {{"session", r.session},
                                 {"uuid", info.uuid},
-                                {"readings", file.set.readings.size()},
-                                {"warnings", file.warnings},
-                                {"nominal_mismatches", file.nominal_mismatches.size()}};
+                                {"readings", r.readings},
+                                {"warnings", r.warnings},
+                                {"nominal_mismatches", r.nominal_mismatches}};
             std::cout << j.dump(2) << '\n';
         } else {
-            std::cout << "imported " << file.set.readings.size() << " readings from " << o.file << " into session "
-                      << id << " (" << info.uuid << ")\n";
+            std::cout << "imported " << r.readings << " readings from " << o.file << " into session " << r.session
+                      << " (" << info.uuid << ")\n";
         }
         return kExitOk;
     } catch (const storage::StorageError& e) {
@@ -105,7 +109,7 @@ int run_import_trace(const ImportOptions& o, const Globals& globals) {
 BALLBAR_COMMAND(import) {
     auto opts = std::make_shared<ballbar::app::ImportOptions>();
     auto* sub = root.add_subcommand("import", "Import a ballbar-readings/1 or ballbar-trace/1 file into a new session");
-    sub->add_option("FILE", opts->file, "readings file (shared/formats/readings.md)")->required();
+    sub->add_option("FILE", opts->file, "readings file (docs/formats/readings.md) or trace file")->required();
     sub->add_flag("--json", opts->json, "print the new session as JSON");
     sub->callback(
         [opts, &globals] { globals.action = [opts, &globals] { return ballbar::app::run_import(*opts, globals); }; });

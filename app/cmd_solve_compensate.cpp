@@ -16,7 +16,9 @@
 
 #include "ballbar/analysis/compensate.hpp"
 #include "ballbar/analysis/lei_hsu.hpp"
+#include "ballbar/fileio/input.hpp"
 #include "command.hpp"
+#include "files.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -107,12 +109,13 @@ json solve_compensate(const json& req) {
 int run_solve_compensate(const std::string& input_path) {
     try {
         std::string text;
-        if (input_path.empty() || input_path == "-") {
-            text.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
-        } else {
-            std::ifstream in(input_path, std::ios::binary);
-            if (!in) throw BadField{"cannot read " + input_path, "--input"};
-            text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        try {  // at most fileio::kMaxJsonBytes, from a regular file or standard input
+            fileio::InputFile in = input_path.empty() || input_path == "-"
+                                       ? fileio::InputFile::standard_input("request")
+                                       : fileio::InputFile::open(input_path, "request file");
+            text = fileio::read_whole(in, fileio::kMaxJsonBytes);
+        } catch (const fileio::FileError& e) {
+            throw BadField{e.what(), "--input"};
         }
         json req;
         try {
@@ -124,7 +127,7 @@ int run_solve_compensate(const std::string& input_path) {
         return kExitOk;
     } catch (const BadField& e) {
         json err;
-        err["error"] = e.message;
+        err["error"] = readable_message(e.message);
         if (!e.field.empty()) err["field"] = e.field;
         std::cerr << err.dump() << '\n';
         return kExitUsage;
