@@ -477,8 +477,7 @@ BALLBAR_COMMAND(demo) {
         ->check(CLI::IsMember({"ballbar", "sylvac", "mitutoyo-itn", "digimatic", "modbus"}));
     sub->add_option("--rate", o->gauge_rate_hz, "The gauge's readings per second (--instrument)")
         ->check(CLI::Range(5.0, 1000.0));
-    sub->add_option("--plan", o->plan, "Plan file (ballbar-plan/1) instead of the default four tests at one socket")
-        ->check(CLI::ExistingFile);
+    sub->add_option("--plan", o->plan, "Plan file (ballbar-plan/1) instead of the default four tests at one socket");
     sub->add_option("--faults", o->faults,
                     "Emulator faults (its \"faults\" object, docs/emulator.md): inline JSON or a file");
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });

@@ -42,7 +42,8 @@ std::vector<fileio::Protected> database_files(const Globals& globals) {
     return {{db, "database"},
             {db + "-wal", "database's write-ahead log"},
             {db + "-shm", "database's shared memory"},
-            {db + "-journal", "database's journal"}};
+            {db + "-journal", "database's journal"},
+            {db + ".lock", "database's lock file"}};
 }
 
 void write_output(const std::string& path, std::string_view option, std::string_view text,

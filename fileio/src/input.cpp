@@ -137,7 +137,9 @@ std::string read_text(const std::string& path, std::string_view what, std::size_
     while (start < text.size()) {
         const char* nl = static_cast<const char*>(std::memchr(text.data() + start, '\n', text.size() - start));
         const std::size_t stop = nl ? static_cast<std::size_t>(nl - text.data()) : text.size();
-        if (stop - start > max_line + 1) {  // +1: a CR before the LF
+        std::size_t length = stop - start;
+        if (length > 0 && text[stop - 1] == '\r') --length;  // CRLF
+        if (length > max_line) {
             throw FileError(FileError::Kind::refused, "the " + std::string(what) + " " + path + ": line " +
                                                           std::to_string(line) + " is longer than " +
                                                           std::to_string(max_line) + " bytes");

@@ -62,7 +62,8 @@ TEST(CliCompensateRefuses, MalformedProgramsWithTheLineAndTheReason) {
     f.expect_refused(f.compensate("%\nG1 X28.5 X1000 Y0 Z0 A30 C0 F100\nM30\n%\n"), "word X twice", 2);
     f.expect_refused(f.compensate("%\nG1 X" + std::string(400, '9') + " Y0 Z0 A30 C0 F100\nM30\n%\n"), "out-of-range",
                      2);
-    f.expect_refused(f.compensate("%\nG1 X1e5 Y0 Z0 A30 C0 F100\nM30\n%\n"), "unsupported word E", 2);
+    f.expect_refused(f.compensate("%\nG1 X1e5 Y0 Z0 A30 C0 F100\nM30\n%\n"), "malformed or out-of-range number '1e5'",
+                     2);
     f.expect_refused(f.compensate("%\nG1 Xnan Y0 Z0 A30 C0 F100\nM30\n%\n"), "unknown word", 2);
     f.expect_refused(f.compensate("%\n#1=5\nG1 X#1 Y0 Z0 A30 C0 F100\nM30\n%\n"), "controller's interpreter", 2);
     f.expect_refused(f.compensate("G1 X[1+2] Y0 Z0 A30 C0 F100\nM2\n", "--dialect linuxcnc"), "expand", 1);

@@ -152,7 +152,7 @@ INSTANTIATE_TEST_SUITE_P(
                       ReaderCase{"demo_plan", "demo --plan {}", "too large"},
                       ReaderCase{"demo_faults", "demo --faults {}", "too large"},
                       ReaderCase{"emulate_config", "emulate --pty --config {}", "too large"}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(CliHostileStdin, SolveReadsAtMost16MiBOfStandardInput) {
     TempDir d;
@@ -276,7 +276,7 @@ INSTANTIATE_TEST_SUITE_P(
                                  "circle plan --plane XY --radius 100 --feed 1000 --machine MACH --out {}", "DM", "%"},
                       WriterCase{"circle_plan_test_out",
                                  "circle plan --plane XY --radius 100 --feed 1000 --out - --test-out {}", "D", "{"}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(CliSafeOutputDemo, ReportIsNeverTheDatabaseNorALink) {
     Outputs o;
