@@ -22,6 +22,7 @@
 #include "circle_measure.hpp"
 #include "circle_output.hpp"
 #include "command.hpp"
+#include "files.hpp"
 #include "storage_errors.hpp"
 
 namespace ballbar::app {
@@ -130,20 +131,6 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
     }
 }
 
-void write_out(const std::string& path, const std::string& text) {
-    if (path == "-") {
-        std::cout << text;
-        return;
-    }
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        f << text;
-        if (!f) throw CliError(kExitFailure, "cannot write " + path);
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) throw CliError(kExitFailure, "cannot write " + path);
-}
-
 int run_plan(const PlanOptions& o, const Globals& globals) {
     const circ::TestSpec t = plan_test(o);
     check_feed_for_rate(t, o.rate_hz);
@@ -162,9 +149,12 @@ int run_plan(const PlanOptions& o, const Globals& globals) {
         if (!d) throw CliError(kExitUsage, "--dialect must be fanuc or linuxcnc");
         dialect = *d;
     }
-    write_out(o.out, circle_program(t, dialect, o.dwell_s, machine ? &*machine : nullptr));
+    std::vector<fileio::Protected> inputs = database_files(globals);
+    if (!o.machine_file.empty()) inputs.push_back({o.machine_file, "machine file"});
+    write_output(o.out, "--out", circle_program(t, dialect, o.dwell_s, machine ? &*machine : nullptr), inputs);
+    if (o.out != "-") inputs.push_back({o.out, "program just written (--out)"});
     const std::string header = storage::test_json(t);
-    if (!o.test_out.empty()) write_out(o.test_out, header + "\n");
+    if (!o.test_out.empty()) write_output(o.test_out, "--test-out", header + "\n", inputs);
     std::cerr << "ballbar: test header: " << header << '\n';
     if (o.store) {
         // A planned circular session: the test header it implies, waiting for its samples.
@@ -206,7 +196,8 @@ struct Loaded {
 Loaded load_input(const std::string& input, const Globals& globals, bool store_file) {
     Loaded l;
     l.name = input;
-    if (std::filesystem::is_regular_file(input)) {
+    std::error_code ec;
+    if (std::filesystem::exists(std::filesystem::symlink_status(input, ec))) {  // a path: fileio says what it is
         try {
             l.trace = storage::read_trace_file(input);
         } catch (const storage::TraceFileError& e) {

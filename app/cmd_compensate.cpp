@@ -24,6 +24,7 @@
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
+#include "files.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -114,7 +115,9 @@ Model parse_model(const std::string& text, const std::string& source) {
 
 Model load_model(const std::string& spec, const Globals& globals) {
     std::error_code ec;
-    if (std::filesystem::is_regular_file(spec, ec)) return parse_model(read_file(spec, "model"), spec);
+    // Anything at that path is a file to read (fileio says when it is a directory or a FIFO).
+    if (std::filesystem::exists(std::filesystem::symlink_status(spec, ec)))
+        return parse_model(read_file(spec, "model"), spec);
     const std::string db = resolve_db_path(globals);
     if (!std::filesystem::exists(db, ec))  // a model id or name is looked up in an existing database only
         throw CliError(kExitUsage, "model '" + spec + "': no such file, and no database at " + db +
@@ -145,83 +148,35 @@ ba::NcDialect pick_dialect(const CompensateArgs& args) {
     return ext == ".ngc" ? ba::NcDialect::LinuxCNC : ba::NcDialect::Fanuc;
 }
 
-/// Where the compensated program goes. "-" or /dev/stdout (or a path to what stdout is): standard
-/// output itself, so the program and nothing else lands there (the caller prints its summary on
-/// stderr then). A regular file (new or not) is written as OUT.part beside it and renamed over it by
-/// commit(), keeping its permissions; until then the destructor removes the .part, so a program with
-/// an error, a full disk or any exception leaves OUT as it was. A symlink is followed. Anything else
-/// that exists (a FIFO, a device) and any path under /dev or /proc is written directly. A directory
-/// is refused before any work.
+/// Where the compensated program goes: fileio::OutputFile ("-" or /dev/stdout: standard output, and
+/// the summary goes to stderr; a regular file is written beside it and renamed over it only by
+/// commit(), so a program with an error leaves OUT as it was).
 class OutputFile {
   public:
-    explicit OutputFile(const std::string& name) : name_(name), target_(name) {
-        namespace fs = std::filesystem;
-        std::error_code ec;
-        if (name == "-" || (fs::equivalent(target_, "/dev/stdout", ec) && !ec)) {
-            stdout_ = true;
-            os_ = &std::cout;
-            return;
-        }
-        const fs::file_status st = fs::status(target_, ec);  // through symlinks
-        if (fs::is_directory(st)) throw CliError(kExitUsage, "--out " + name_ + " is a directory");
-        // Device and process files (/dev/stderr, /proc/self/fd/N) are never renamed over.
-        auto system_file = [](const fs::path& p) {
-            const std::string s = p.string();
-            return s.rfind("/dev/", 0) == 0 || s.rfind("/proc/", 0) == 0;
-        };
-        direct_ =
-            (fs::exists(st) && !fs::is_regular_file(st)) || system_file(fs::absolute(target_, ec).lexically_normal());
-        if (!direct_ && fs::is_symlink(fs::symlink_status(target_, ec))) {
-            const fs::path real = fs::canonical(target_, ec);  // replace the file, keep the link
-            if (ec || system_file(real))
-                direct_ = true;
-            else
-                target_ = real;
-        }
-        path_ = target_;
-        if (!direct_) path_ += ".part";
-        file_.open(path_, std::ios::binary | std::ios::trunc);
-        if (!file_) throw CliError(kExitFailure, "cannot write " + path_.string());
-        os_ = &file_;
+    OutputFile(const std::string& name, const std::vector<fileio::Protected>& inputs) try
+        : file_(name, "--out", inputs) {
+    } catch (const fileio::FileError& e) {
+        throw cli_error(e);
     }
-    ~OutputFile() {
-        if (committed_ || direct_ || stdout_ || !file_.is_open()) return;
-        file_.close();
-        std::error_code ec;
-        std::filesystem::remove(path_, ec);
-    }
-    OutputFile(const OutputFile&) = delete;
-    OutputFile& operator=(const OutputFile&) = delete;
-
-    /// The program goes to standard output: the summary must not.
-    bool is_stdout() const { return stdout_; }
+    bool is_stdout() const { return file_.is_stdout(); }
     void write(std::string_view text) {
-        os_->write(text.data(), static_cast<std::streamsize>(text.size()));
-        if (!*os_) throw CliError(kExitFailure, "write failed: " + name_);
+        try {
+            file_.write(text);
+        } catch (const fileio::FileError& e) {
+            throw cli_error(e);
+        }
     }
     void commit() {
-        if (stdout_) {
-            std::cout.flush();
-            if (!std::cout) throw CliError(kExitFailure, "write failed: " + name_);
-            return;
+        try {
+            if (file_.is_stdout()) std::cout.flush();
+            file_.commit();
+        } catch (const fileio::FileError& e) {
+            throw cli_error(e);
         }
-        file_.close();
-        if (!file_) throw CliError(kExitFailure, "write failed: " + name_);
-        if (direct_) return;
-        namespace fs = std::filesystem;
-        std::error_code ec;
-        if (fs::is_regular_file(target_, ec)) fs::permissions(path_, fs::status(target_, ec).permissions(), ec);
-        fs::rename(path_, target_, ec);
-        if (ec) throw CliError(kExitFailure, "cannot write " + name_ + ": " + ec.message());
-        committed_ = true;
     }
 
   private:
-    std::string name_;
-    std::filesystem::path target_, path_;
-    std::ofstream file_;
-    std::ostream* os_ = nullptr;
-    bool stdout_ = false, direct_ = false, committed_ = false;
+    fileio::OutputFile file_;
 };
 
 /// The work-offset and tool table (docs/compensation.md, "The offsets table").
@@ -312,30 +267,25 @@ std::vector<std::string> split_codes(const std::string& list) {
     return out;
 }
 
-/// --out must not be one of the inputs (it would be replaced by its own compensation).
-void refuse_out_over_input(const std::string& out, const std::string& input, const char* what) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (out == "-" || input.empty()) return;
-    const bool same = fs::exists(out, ec) && fs::exists(input, ec) && fs::equivalent(out, input, ec) && !ec;
-    if (same || fs::weakly_canonical(out, ec) == fs::weakly_canonical(input, ec))
-        throw CliError(kExitUsage, "--out " + out + " is the " + what + ": it would be overwritten (write elsewhere)");
-}
-
 int run_compensate(const CompensateArgs& args, const Globals& globals) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (fs::is_directory(args.program, ec))
         throw CliError(kExitUsage, "--program " + args.program + " is a directory, not an NC program");
-    refuse_out_over_input(args.out, args.program, "program");
-    if (fs::is_regular_file(args.model, ec)) refuse_out_over_input(args.out, args.model, "model file");
-    refuse_out_over_input(args.out, resolve_db_path(globals), "database");
-    if (!args.offsets.empty()) refuse_out_over_input(args.out, args.offsets, "offsets table");
+    std::vector<fileio::Protected> inputs = database_files(globals);
+    inputs.push_back({args.program, "program"});
+    inputs.push_back({args.model, "model file"});  // when it names a file
+    if (!args.offsets.empty()) inputs.push_back({args.offsets, "offsets table"});
+    try {
+        fileio::check_output(args.out, "--out", inputs);  // before any work
+    } catch (const fileio::FileError& e) {
+        throw cli_error(e);
+    }
     if (!(args.chord_tolerance_mm > 0)) throw CliError(kExitUsage, "--chord-tolerance must be positive");
 
     const Model model = load_model(args.model, globals);
     const ba::NcDialect dialect = pick_dialect(args);
-    const std::string text = read_file(args.program, "program");
+    const std::string text = read_program_file(args.program, "program");
 
     ba::NcInterpreterOptions io;
     io.dialect = dialect;
@@ -367,7 +317,7 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     co.empirical = model.empirical;  // terms learned by discover (angular tables, positioning errors)
     co.title = "compensated by ballbar with " + model.source;
 
-    OutputFile out(args.out);
+    OutputFile out(args.out, inputs);
     ba::NcCompensateSummary s;
     try {
         s = ba::compensate_nc_program(text, model.machine, model.params, io, co,

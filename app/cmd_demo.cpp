@@ -28,6 +28,7 @@
 #include "circle_measure.hpp"  // demo --test circular
 #include "command.hpp"
 #include "figures.hpp"
+#include "files.hpp"
 #include "gauge_source.hpp"  // demo --instrument: a digital gauge (issue 14)
 #if __has_include("ballbar/report/build.hpp")
 #include "ballbar/report/build.hpp"
@@ -266,6 +267,16 @@ double location_sigma(const json& l) {
 }
 
 int run_demo(const DemoOptions& o, const Globals& globals) {
+    std::vector<fileio::Protected> inputs = database_files(globals);
+    inputs.push_back({o.plan, "plan file"});
+    inputs.push_back({o.faults, "faults file"});
+    if (!o.report.empty()) {
+        try {
+            fileio::check_output(o.report, "--report", inputs);  // before the demo runs
+        } catch (const fileio::FileError& e) {
+            throw cli_error(e);
+        }
+    }
     if (o.test == "circular")
         return run_circular_demo({o.seed, o.json, o.plane, o.arc_deg, 100.0, 1000.0, o.faults}, globals);
     if (!o.instrument.empty() && o.instrument != "ballbar")
@@ -432,7 +443,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
 #endif
     if (!o.report.empty()) {
 #ifdef BALLBAR_HAVE_REPORT
-        report::render_pdf(report::build_report(store, id), o.report);
+        write_output(o.report, "--report", report::render_pdf_bytes(report::build_report(store, id)), inputs);
         out["report"] = o.report;
 #else
         throw CliError(kExitFailure, "--report: this build has no report module");
@@ -493,8 +504,7 @@ BALLBAR_COMMAND(demo) {
         ->check(CLI::IsMember({"ballbar", "sylvac", "mitutoyo-itn", "digimatic", "modbus"}));
     sub->add_option("--rate", o->gauge_rate_hz, "The gauge's readings per second (--instrument)")
         ->check(CLI::Range(5.0, 1000.0));
-    sub->add_option("--plan", o->plan, "Plan file (ballbar-plan/1) instead of the default four tests at one socket")
-        ->check(CLI::ExistingFile);
+    sub->add_option("--plan", o->plan, "Plan file (ballbar-plan/1) instead of the default four tests at one socket");
     sub->add_option("--faults", o->faults,
                     "Emulator faults (its \"faults\" object, docs/emulator.md): inline JSON or a file");
     sub->add_option("--test", o->test, "ssm (default: the two-step SSM) or circular (ISO 230-4)")

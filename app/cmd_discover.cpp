@@ -52,7 +52,8 @@ Inputs load_inputs(const DiscoverOptions& o, const Globals& globals, std::unique
     Inputs in;
     for (const std::string& arg : o.inputs) {
         std::error_code ec;
-        if (std::filesystem::is_regular_file(arg, ec)) {
+        // Anything at that path is a file to read (fileio says when it is a directory or a FIFO).
+        if (std::filesystem::exists(std::filesystem::symlink_status(arg, ec))) {
             try {
                 in.sets.push_back(storage::read_readings_file(arg).set);
             } catch (const storage::ReadingsFileError& e) {

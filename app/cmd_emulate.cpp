@@ -88,7 +88,7 @@ BALLBAR_COMMAND(emulate) {
     auto o = std::make_shared<EmulateOptions>();
     sub->add_flag("--pty", o->pty, "Serve on a new pseudo-terminal; prints its path (use serial:PATH)");
     sub->add_option("--tcp", o->tcp_port, "Serve on 127.0.0.1:PORT (0 picks a free port); prints tcp:127.0.0.1:PORT");
-    sub->add_option("--config", o->config, "Emulator configuration (JSON, docs/emulator.md)")->check(CLI::ExistingFile);
+    sub->add_option("--config", o->config, "Emulator configuration (JSON, docs/emulator.md)");
     sub->add_option("--seed", o->seed, "Random seed (overrides the configuration's)");
     sub->add_flag("--fast", o->fast, "Stream as fast as the host reads instead of in real time");
     sub->add_option("--link", o->link, "Keep a symlink at this path to the current pty");

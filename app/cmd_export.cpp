@@ -2,7 +2,7 @@
 // `ballbar export SESSION --format readings|json|csv --out PATH`. readings: the interchange file; json: the
 // whole session (metadata, transitions, points, results); csv: PATH is a directory that receives
 // points.csv and samples.csv (docs/storage.md). `--out -` writes readings or json to stdout.
-#include <fstream>
+#include <filesystem>
 #include <iostream>
 
 #include "ballbar/storage/readings.hpp"
@@ -11,6 +11,7 @@
 #include "ballbar/storage/store.hpp"
 #include "ballbar/storage/trace_file.hpp"
 #include "command.hpp"
+#include "files.hpp"
 #include "storage_errors.hpp"
 
 namespace ballbar::app {
@@ -22,22 +23,11 @@ struct ExportOptions {
     std::string out;
 };
 
-void write_text(const std::string& path, const std::string& text) {
-    if (path == "-") {
-        std::cout << text;
-        return;
-    }
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        f << text;
-        f.flush();
-        if (!f) throw CliError(kExitFailure, "cannot write " + path);
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) throw CliError(kExitFailure, "cannot write " + path);
-}
-
 int run_export(const ExportOptions& o, const Globals& globals) {
+    const auto inputs = database_files(globals);
+    auto write_text = [&](const std::string& path, const std::string& text) {
+        write_output(path, "--out", text, inputs);
+    };
     try {
         storage::StoreOptions so;
         so.recover = false;                                   // a reader: leave sessions of a running acquisition alone
@@ -49,17 +39,21 @@ int run_export(const ExportOptions& o, const Globals& globals) {
             if (set.readings.empty()) throw CliError(kExitFailure, "session " + std::to_string(id) + " has no points");
             write_text(o.out, storage::format_readings(set, storage::readings_metadata(info)));
         } else if (o.format == "trace") {
+            std::string text;
             try {
-                write_text(o.out, storage::format_trace(storage::load_trace(store, id)));
+                text = storage::format_trace(storage::load_trace(store, id));
             } catch (const storage::StorageError&) {
                 throw;
             } catch (const std::runtime_error& e) {
                 throw CliError(kExitFailure, e.what());
             }
+            write_text(o.out, text);
         } else if (o.format == "json") {
             write_text(o.out, storage::session_json(store, id) + "\n");
         } else {
             if (o.out == "-") throw CliError(kExitUsage, "--format csv writes two files: give --out DIRECTORY");
+            for (const char* name : {"points.csv", "samples.csv"})
+                fileio::check_output((std::filesystem::path(o.out) / name).string(), "--out", inputs);
             storage::export_csv(store, id, o.out);
         }
         if (o.out != "-")

@@ -135,7 +135,8 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
         std::error_code ec;
         if (!std::filesystem::exists(in, ec) && !looks_like_session_key(in))
             throw CliError(kExitUsage, "no such file: " + in);
-        if (std::filesystem::is_regular_file(in, ec)) {
+        // Anything at that path is a file to read (fileio says when it is a directory or a FIFO).
+        if (std::filesystem::exists(std::filesystem::symlink_status(in, ec))) {
             try {
                 sets.push_back(bs::read_readings_file(in).set);
             } catch (const bs::ReadingsFileError& e) {

@@ -5,13 +5,16 @@
 // is refused (exit 2) naming the session it duplicates, unless --allow-duplicate.
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
+#include "ballbar/fileio/input.hpp"
 #include "ballbar/storage/imports.hpp"
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/storage/trace_file.hpp"
 #include "command.hpp"
+#include "files.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -22,11 +25,28 @@ struct ImportOptions {
     bool allow_duplicate = false;
 };
 
-/// The file's bytes and their SHA-256, read once.
+/// The file's SHA-256 and size, streamed in 1 MiB pieces (memory independent of the file's length).
 struct Content {
-    std::string bytes;
     std::string sha256;
+    std::int64_t bytes = 0;
 };
+
+Content hash_file(const std::string& path) {
+    try {
+        fileio::InputFile in = fileio::InputFile::open(path, "file to import");
+        storage::Sha256 h;
+        std::string buf(1 << 20, '\0');
+        Content c;
+        while (const std::size_t n = in.read(buf.data(), buf.size())) {
+            h.update(std::string_view(buf.data(), n));
+            c.bytes += static_cast<std::int64_t>(n);
+        }
+        c.sha256 = h.hex();
+        return c;
+    } catch (const fileio::FileError& e) {
+        throw cli_error(e);
+    }
+}
 
 /// Refuses content imported before (exit 2, naming the session), or with --allow-duplicate warns and
 /// returns the sessions it duplicates. Runs in the import's transaction, so two imports of one file at
@@ -55,59 +75,59 @@ nlohmann::json ids_json(const std::vector<std::int64_t>& ids) {
     return j;
 }
 
-std::string mismatch_summary(const storage::ReadingsFile& f) {
-    const auto& m = f.nominal_mismatches;
+std::string mismatch_summary(const storage::ImportedReadings& r) {
     std::string lines;
-    double worst = 0;
-    for (std::size_t i = 0; i < m.size(); ++i) {
-        if (i < 10) lines += (i ? ", " : "") + std::to_string(m[i].line);
-        worst = std::max(worst, std::abs(m[i].file_nominal_mm - m[i].computed_nominal_mm));
-    }
-    if (m.size() > 10) lines += ", …";
-    return std::to_string(m.size()) +
+    for (std::size_t i = 0; i < r.first_mismatch_lines.size(); ++i)
+        lines += (i ? ", " : "") + std::to_string(r.first_mismatch_lines[i]);
+    if (r.nominal_mismatches > r.first_mismatch_lines.size()) lines += ", …";
+    return std::to_string(r.nominal_mismatches) +
            " row(s) give a nominal_mm that differs from the length recomputed from the "
            "machine geometry by more than 0.001 mm (largest " +
-           std::to_string(worst) + " mm; lines " + lines +
+           std::to_string(r.worst_mismatch_mm) + " mm; lines " + lines +
            "): the producer's geometry or conventions may disagree with this file's machine header";
 }
 
 int run_import_trace(const ImportOptions& o, const Content& c, const Globals& globals);
 
+/// Streams the file into the database in batches, in one transaction (memory independent of the
+/// file's length); an invalid line anywhere stores nothing.
 int run_import(const ImportOptions& o, const Globals& globals) {
-    Content c;
-    c.bytes = read_file(o.file, "file");
-    c.sha256 = storage::sha256_hex(c.bytes);
-    if (storage::looks_like_trace(c.bytes.substr(0, 64))) return run_import_trace(o, c, globals);
-    storage::ReadingsFile file;
+    const Content c = hash_file(o.file);
+    if (storage::looks_like_trace(fileio::read_head(o.file, "file to import", 64))) return run_import_trace(o, c, globals);
+    std::optional<storage::ReadingsStream> stream;
     try {
-        file = storage::read_readings_file(o.file);
+        stream.emplace(storage::ReadingsStream::open(o.file));
     } catch (const storage::ReadingsFileError& e) {
         throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
     }
-    for (const auto& w : file.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
-    if (!file.nominal_mismatches.empty()) {
-        std::cerr << "ballbar: warning: " << o.file << ": " << mismatch_summary(file) << '\n';
-    }
+    storage::ImportedReadings r;
     try {
         storage::Store store(resolve_db_path(globals));
         storage::Transaction tx(store.db());
         const auto duplicates = check_duplicate(store, c, o);
-        const auto id = storage::import_readings(store, file, o.file);
-        storage::record_import(store, id, c.sha256, o.file, static_cast<std::int64_t>(c.bytes.size()));
+        try {
+            r = storage::import_readings_stream(store, *stream, o.file);
+        } catch (const storage::ReadingsFileError& e) {
+            throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
+        }
+        storage::record_import(store, r.session, c.sha256, o.file, c.bytes);
         tx.commit();
-        const auto info = store.session(id);
+        for (const auto& w : r.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
+        if (r.nominal_mismatches > 0)
+            std::cerr << "ballbar: warning: " << o.file << ": " << mismatch_summary(r) << '\n';
+        const auto info = store.session(r.session);
         if (o.json) {
-            nlohmann::json j = {{"session", id},
+            nlohmann::json j = {{"session", r.session},
                                 {"uuid", info.uuid},
-                                {"readings", file.set.readings.size()},
-                                {"warnings", file.warnings},
-                                {"nominal_mismatches", file.nominal_mismatches.size()},
+                                {"readings", r.readings},
+                                {"warnings", r.warnings},
+                                {"nominal_mismatches", r.nominal_mismatches},
                                 {"sha256", c.sha256},
                                 {"duplicate_of", ids_json(duplicates)}};
             std::cout << j.dump(2) << '\n';
         } else {
-            std::cout << "imported " << file.set.readings.size() << " readings from " << o.file << " into session "
-                      << id << " (" << info.uuid << ")\n";
+            std::cout << "imported " << r.readings << " readings from " << o.file << " into session " << r.session
+                      << " (" << info.uuid << ")\n";
         }
         return kExitOk;
     } catch (const storage::StorageError& e) {
@@ -129,7 +149,7 @@ int run_import_trace(const ImportOptions& o, const Content& c, const Globals& gl
         storage::Transaction tx(store.db());
         const auto duplicates = check_duplicate(store, c, o);
         const auto id = storage::import_trace(store, trace, o.file);
-        storage::record_import(store, id, c.sha256, o.file, static_cast<std::int64_t>(c.bytes.size()));
+        storage::record_import(store, id, c.sha256, o.file, c.bytes);
         tx.commit();
         const auto info = store.session(id);
         if (o.json) {

@@ -19,6 +19,7 @@
 #include "ballbar/device/gauge.hpp"
 #include "ballbar/device/uri.hpp"
 #include "command.hpp"
+#include "files.hpp"
 #include "gauge_source.hpp"
 #include "interrupt.hpp"
 #include "operators.hpp"
@@ -95,8 +96,16 @@ void record_instrument(storage::Store& store, std::int64_t id, const device::Ins
     store.set_instrument(id, in);
 }
 
+/// What --program must never replace: the machine and plan files, the database.
+std::vector<fileio::Protected> measure_inputs(const MeasureOptions& o, const std::string& db) {
+    std::vector<fileio::Protected> inputs = {{o.machine_file, "machine file"}, {o.plan_file, "plan file"}};
+    if (!db.empty())
+        for (const char* side : {"", "-wal", "-shm", "-journal"}) inputs.push_back({db + side, "database"});
+    return inputs;
+}
+
 /// --dry-run: plan, check and write the NC program; no instrument, no database.
-int dry_run(const MeasureOptions& o) {
+int dry_run(const MeasureOptions& o, const Globals& globals) {
     if (o.machine_file.empty()) throw CliError(kExitUsage, "--machine FILE is required");
     try {
         const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
@@ -112,9 +121,7 @@ int dry_run(const MeasureOptions& o) {
             std::cout << text;
             return kExitOk;
         }
-        std::ofstream f(o.program_file);
-        f << text;
-        if (!f) throw CliError(kExitFailure, "cannot write " + o.program_file);
+        write_output(o.program_file, "--program", text, measure_inputs(o, globals.db_path));
         std::cout << "Plan checked: " << plan.test_count() << " tests, " << plan.points.size()
                   << " points within the travel; NC program written to " << o.program_file << "\n";
         return kExitOk;
@@ -171,8 +178,15 @@ acq::Plan new_plan(const MeasureOptions& o) {
 }
 
 int run_measure(const MeasureOptions& o, const Globals& globals) {
-    if (o.dry_run) return dry_run(o);
+    if (o.dry_run) return dry_run(o, globals);
     check_command_line(o);
+    if (!o.program_file.empty()) {
+        try {
+            fileio::check_output(o.program_file, "--program", measure_inputs(o, resolve_db_path(globals)));
+        } catch (const fileio::FileError& e) {
+            throw cli_error(e);
+        }
+    }
     std::int64_t id = 0;
     acq::Plan plan;
     std::vector<acq::CapturedPoint> done;

@@ -15,6 +15,7 @@
 #include "ballbar/storage/store.hpp"
 #include "ballbar/version.hpp"
 #include "command.hpp"
+#include "files.hpp"
 #include "storage_errors.hpp"
 
 namespace ballbar::app {
@@ -29,6 +30,14 @@ struct ReportOptions {
 
 int run_report(const ReportOptions& o, const Globals& globals) {
     if (o.out.empty() && !o.json) throw CliError(kExitUsage, "nothing to write: give --out FILE.pdf and/or --json");
+    const auto inputs = database_files(globals);
+    if (!o.out.empty()) {
+        try {
+            fileio::check_output(o.out, "--out", inputs);  // before any work
+        } catch (const fileio::FileError& e) {
+            throw cli_error(e);
+        }
+    }
     storage::StoreOptions so;
     so.read_only = true;  // a report never changes the database
     so.recover = false;
@@ -57,12 +66,15 @@ int run_report(const ReportOptions& o, const Globals& globals) {
     }
     if (o.tolerance_um) report::set_circular_tolerance(r, *o.tolerance_um);
     if (!o.out.empty()) {
+        int pages = 0;
+        std::string pdf;
         try {
-            const int pages = report::render_pdf(r, o.out);
-            std::cerr << "ballbar: wrote " << o.out << " (" << pages << (pages == 1 ? " page" : " pages") << ")\n";
+            pdf = report::render_pdf_bytes(r, &pages);
         } catch (const report::ReportError& e) {
             throw CliError(kExitFailure, e.what());
         }
+        write_output(o.out, "--out", pdf, inputs);
+        std::cerr << "ballbar: wrote " << o.out << " (" << pages << (pages == 1 ? " page" : " pages") << ")\n";
     }
     if (o.json) std::cout << report::to_json(r).dump(2) << std::endl;
     return kExitOk;

@@ -19,7 +19,9 @@
 #include "ballbar/analysis/limits.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/ssm.hpp"
+#include "ballbar/fileio/input.hpp"
 #include "command.hpp"
+#include "files.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -114,12 +116,13 @@ json to_json(const ba::Vec3& v) {
 
 json read_request(const std::string& input_path) {
     std::string text;
-    if (input_path.empty() || input_path == "-") {
-        text.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
-    } else {
-        std::ifstream in(input_path, std::ios::binary);
-        if (!in) throw RequestError{"cannot read " + input_path, "--input"};
-        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    try {  // at most fileio::kMaxJsonBytes, from a regular file or standard input
+        fileio::InputFile in = input_path.empty() || input_path == "-"
+                                   ? fileio::InputFile::standard_input("request")
+                                   : fileio::InputFile::open(input_path, "request file");
+        text = fileio::read_whole(in, fileio::kMaxJsonBytes);
+    } catch (const fileio::FileError& e) {
+        throw RequestError{e.what(), "--input"};
     }
     try {
         return json::parse(text);
@@ -329,7 +332,7 @@ int run(const std::string& input_path, json (*solver)(const json&)) {
         return kExitOk;
     } catch (const RequestError& e) {
         json err;
-        err["error"] = e.message;
+        err["error"] = readable_message(e.message);
         if (!e.field.empty()) err["field"] = e.field;
         // The message may quote the input's bytes (a parse error's "last read"): not UTF-8 is replaced,
         // not thrown (found by fuzz_cli_json).

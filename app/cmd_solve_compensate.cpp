@@ -17,7 +17,9 @@
 #include "ballbar/analysis/compensate.hpp"
 #include "ballbar/analysis/lei_hsu.hpp"
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/fileio/input.hpp"
 #include "command.hpp"
+#include "files.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -120,12 +122,13 @@ json solve_compensate(const json& req) {
 int run_solve_compensate(const std::string& input_path) {
     try {
         std::string text;
-        if (input_path.empty() || input_path == "-") {
-            text.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
-        } else {
-            std::ifstream in(input_path, std::ios::binary);
-            if (!in) throw BadField{"cannot read " + input_path, "--input"};
-            text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        try {  // at most fileio::kMaxJsonBytes, from a regular file or standard input
+            fileio::InputFile in = input_path.empty() || input_path == "-"
+                                       ? fileio::InputFile::standard_input("request")
+                                       : fileio::InputFile::open(input_path, "request file");
+            text = fileio::read_whole(in, fileio::kMaxJsonBytes);
+        } catch (const fileio::FileError& e) {
+            throw BadField{e.what(), "--input"};
         }
         json req;
         try {
@@ -137,7 +140,7 @@ int run_solve_compensate(const std::string& input_path) {
         return kExitOk;
     } catch (const BadField& e) {
         json err;
-        err["error"] = e.message;
+        err["error"] = readable_message(e.message);
         if (!e.field.empty()) err["field"] = e.field;
         std::cerr << err.dump(-1, ' ', false, json::error_handler_t::replace) << '\n';  // input bytes quoted
         return kExitUsage;

@@ -68,8 +68,8 @@ std::string existing_db_path(const Globals& globals);
 /// command taking "FILE or SESSION" can say "no such file" for anything else that is not a file.
 bool looks_like_session_key(std::string_view arg);
 
-/// The whole of a file (binary, one bulk copy). Throws CliError(kExitUsage) naming `what` ("machine
-/// file", "program") when it cannot be read.
+/// The whole of a JSON input file, at most fileio::kMaxJsonBytes (app/files.cpp). Throws
+/// CliError(kExitUsage) naming `what` ("machine file") when it cannot be read or is refused.
 std::string read_file(const std::string& path, const char* what);
 
 }  // namespace ballbar::app

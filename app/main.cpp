@@ -14,6 +14,7 @@
 
 #include "ballbar/version.hpp"
 #include "command.hpp"
+#include "files.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -62,15 +63,6 @@ bool looks_like_session_key(std::string_view arg) {
     return !arg.empty() && std::all_of(arg.begin(), arg.end(), [](char c) {
         return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F') || c == '-';
     });
-}
-
-std::string read_file(const std::string& path, const char* what) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw CliError(kExitUsage, std::string("cannot read the ") + what + " " + path);
-    std::ostringstream text;  // a million-block NC program is ~50 MB
-    text << in.rdbuf();
-    if (in.bad()) throw CliError(kExitUsage, std::string("read failed: ") + what + " " + path);
-    return std::move(text).str();
 }
 
 namespace {
@@ -156,10 +148,13 @@ int main(int argc, char** argv) {
     try {
         return globals.action ? globals.action() : kExitOk;
     } catch (const CliError& e) {
-        std::cerr << "ballbar: error: " << e.what() << '\n';
+        std::cerr << "ballbar: error: " << readable_message(e.what()) << '\n';
         return e.code();
+    } catch (const ballbar::fileio::FileError& e) {
+        std::cerr << "ballbar: error: " << readable_message(e.what()) << '\n';
+        return cli_error(e).code();
     } catch (const std::exception& e) {
-        std::cerr << "ballbar: error: " << e.what() << '\n';
+        std::cerr << "ballbar: error: " << readable_message(e.what()) << '\n';
         return kExitFailure;
     }
 }

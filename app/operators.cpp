@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "ballbar/fileio/output.hpp"
+
 namespace ballbar::app {
 
 namespace acq = ballbar::acquisition;
@@ -98,9 +100,11 @@ std::optional<std::size_t> read_choice(std::istream& in, std::ostream& out, cons
 }
 
 void write_program_file(const std::string& path, const analysis::NcProgram& program) {
-    std::ofstream f(path);
-    f << analysis::write_nc_program(program, "ballbar SSM");
-    if (!f) throw acq::SourceError("cannot write the NC program to " + path);
+    try {  // cmd_measure has refused a --program that is one of its inputs
+        fileio::write_file(path, "--program", analysis::write_nc_program(program, "ballbar SSM"));
+    } catch (const fileio::FileError& e) {
+        throw acq::SourceError(std::string("cannot write the NC program: ") + e.what());
+    }
 }
 
 // ---- TerminalOperator ------------------------------------------------------------------------------

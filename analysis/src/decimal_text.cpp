@@ -31,4 +31,18 @@ bool read_short_decimal(std::string_view s, std::size_t& pos, double& value) {
     return true;
 }
 
+bool exponent_at(std::string_view text, std::size_t pos) {
+    if (pos >= text.size() || (text[pos] != 'e' && text[pos] != 'E')) return false;
+    std::size_t k = pos + 1;
+    if (k < text.size() && (text[k] == '+' || text[k] == '-')) ++k;
+    return k < text.size() && text[k] >= '0' && text[k] <= '9';
+}
+
+std::string shown_token(std::string_view token, std::size_t max_chars) {
+    if (token.size() <= max_chars) return std::string(token);
+    std::size_t n = max_chars;
+    while (n > 0 && (static_cast<unsigned char>(token[n]) & 0xC0) == 0x80) --n;
+    return std::string(token.substr(0, n)) + "…";
+}
+
 }  // namespace ballbar::analysis

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/analysis/nc_interpreter.hpp"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 
@@ -47,8 +48,27 @@ bool iequal(std::string_view a, std::string_view b) {
     throw NcError(line, std::string("unexpected character '") + c + "'");
 }
 
+/// "1e308" after a word letter: a number NC does not have, named as such (not as a word E).
+[[noreturn]] void exponent_number(std::string_view s, std::size_t start, std::size_t i, int line, char letter) {
+    std::size_t end = i + 1;
+    while (end < s.size() &&
+           (std::isalnum(static_cast<unsigned char>(s[end])) || s[end] == '+' || s[end] == '-' || s[end] == '.'))
+        ++end;
+    throw NcError(line, std::string("word ") + letter + " has a malformed or out-of-range number '" +
+                            shown_token(s.substr(start, end - start)) +
+                            "' (NC numbers are plain decimals, without an exponent)");
+}
+
 /// A number after a word letter: [+-]digits[.digits] (no exponent, no nan/inf: NC has none).
+double number_text(std::string_view s, std::size_t& i, int line, char letter);
 double number(std::string_view s, std::size_t& i, int line, char letter) {
+    const std::size_t start = i;
+    const double v = number_text(s, i, line, letter);
+    if (exponent_at(s, i)) exponent_number(s, start, i, line, letter);
+    return v;
+}
+
+double number_text(std::string_view s, std::size_t& i, int line, char letter) {
     const std::size_t start = i;
     if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
     // The common case, a digit first: the exact fast path (decimal_text.hpp), else from_chars (no exponent) in one
@@ -93,7 +113,7 @@ double number(std::string_view s, std::size_t& i, int line, char letter) {
     const auto res = std::from_chars(num.data(), num.data() + num.size(), v);
     if (res.ec != std::errc() || res.ptr != num.data() + num.size() || !std::isfinite(v) || std::abs(v) > kMaxWord)
         throw NcError(line, std::string("word ") + letter + " has a malformed or out-of-range number '" +
-                                std::string(s.substr(start, i - start)) + "'");
+                                shown_token(s.substr(start, i - start)) + "'");
     return negative ? -v : v;
 }
 

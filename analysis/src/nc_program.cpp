@@ -4,12 +4,14 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <limits>
 
+#include "ballbar/analysis/decimal_text.hpp"
 #include "ballbar/analysis/limits.hpp"
 
 namespace ballbar::analysis {
@@ -58,6 +60,15 @@ double parse_number(std::string_view text, std::size_t& pos, int line, char lett
     const std::size_t start = pos;
     if (pos < text.size() && (text[pos] == '+' || text[pos] == '-')) ++pos;
     while (pos < text.size() && ((text[pos] >= '0' && text[pos] <= '9') || text[pos] == '.')) ++pos;
+    if (exponent_at(text, pos)) {  // "X1e308": a number NC does not have, not an X word and an E word
+        std::size_t end = pos + 1;
+        while (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) || text[end] == '+' ||
+                                     text[end] == '-' || text[end] == '.'))
+            ++end;
+        throw NcError(line, std::string("word ") + letter + " has a malformed or out-of-range number '" +
+                                shown_token(text.substr(start, end - start)) +
+                                "' (NC numbers are plain decimals, without an exponent)");
+    }
     const std::string_view num = text.substr(start, pos - start);
     if (num.empty() || num == "+" || num == "-" || num == ".")
         throw NcError(line, std::string("word ") + letter + " has no number");
@@ -75,7 +86,7 @@ double parse_number(std::string_view text, std::size_t& pos, int line, char lett
             digits.remove_prefix(1);
         }
         if (digits.size() + 2 > sizeof buf)
-            throw NcError(line, std::string("word ") + letter + " has a malformed number '" + std::string(num) + "'");
+            throw NcError(line, std::string("word ") + letter + " has a malformed number '" + shown_token(num) + "'");
         std::size_t k = 0;
         if (negative) buf[k++] = '-';
         if (digits.front() == '.') buf[k++] = '0';
@@ -86,7 +97,7 @@ double parse_number(std::string_view text, std::size_t& pos, int line, char lett
     double value = 0;
     const auto res = std::from_chars(first, last, value);
     if (res.ec != std::errc() || res.ptr != last)
-        throw NcError(line, std::string("word ") + letter + " has a malformed number '" + std::string(num) + "'");
+        throw NcError(line, std::string("word ") + letter + " has a malformed number '" + shown_token(num) + "'");
     return value;
 }
 

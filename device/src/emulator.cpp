@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "ballbar/analysis/sample.hpp"
+#include "ballbar/fileio/input.hpp"
 
 namespace ballbar::device {
 
@@ -55,20 +56,17 @@ void Emulator::cycle_start() {
     const double t_s = static_cast<double>(now_us_) * 1e-6;
     NcSource& src = *config_.program;
     if (!src.file.empty()) {
-        std::ifstream in(src.file, std::ios::binary);
-        std::ostringstream ss;
-        ss << in.rdbuf();
-        if (in || in.eof()) {
-            const std::string text = ss.str();
-            try {
-                if (continuous_)
-                    parse_motion_program(text, src.dialect, {0, 0, 0}, 1.0);
-                else
-                    analysis::parse_nc_program(text, src.dialect);
-                if (!text.empty()) src.text = text;
-            } catch (const analysis::NcError&) {
-                // a half-written file: keep the last program
-            }
+        try {
+            const std::string text = fileio::read_text(src.file, "NC program");  // capped; regular files only
+            if (continuous_)
+                parse_motion_program(text, src.dialect, {0, 0, 0}, 1.0);
+            else
+                analysis::parse_nc_program(text, src.dialect);
+            if (!text.empty()) src.text = text;
+        } catch (const fileio::FileError&) {
+            // gone, unreadable or too large: keep the last program
+        } catch (const analysis::NcError&) {
+            // a half-written file: keep the last program
         }
     }
     if (src.text.empty()) return;

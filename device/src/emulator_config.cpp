@@ -10,6 +10,7 @@
 
 #include "ballbar/analysis/limits.hpp"
 #include "ballbar/device/emulator.hpp"
+#include "ballbar/fileio/input.hpp"
 
 namespace ballbar::device {
 
@@ -268,12 +269,13 @@ void parse_continuous(const json& j, ContinuousErrors& e) {
     if (!(e.vibration_hz >= 0 && e.vibration_hz <= 2500)) fail(w + ".vibration_hz", "must be in [0, 2500] Hz");
 }
 
-std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::invalid_argument("cannot read " + path);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+/// A configuration (at most fileio::kMaxJsonBytes) or an NC program (fileio::kMaxTextBytes).
+std::string read_file(const std::string& path, const char* what, bool program = false) {
+    try {
+        return program ? fileio::read_text(path, what) : fileio::read_whole(path, what, fileio::kMaxJsonBytes);
+    } catch (const fileio::FileError& e) {
+        throw std::invalid_argument(e.what());
+    }
 }
 
 }  // namespace
@@ -321,7 +323,7 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
             if (f.is_relative()) f = std::filesystem::path(base_dir) / f;
             src.file = f.string();
             // Waiting for cycle start, the file may not exist yet: the host writes it before the start.
-            if (src.power_on || std::filesystem::exists(f)) src.text = read_file(f.string());
+            if (src.power_on || std::filesystem::exists(f)) src.text = read_file(f.string(), "NC program", true);
         }
         try {
             if (c.continuous)  // arcs: the continuous machine's own reader
@@ -338,7 +340,7 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
 
 EmulatorConfig load_emulator_config(const std::string& path) {
     const auto dir = std::filesystem::path(path).parent_path();
-    return parse_emulator_config(read_file(path), dir.empty() ? "." : dir.string());
+    return parse_emulator_config(read_file(path, "emulator configuration"), dir.empty() ? "." : dir.string());
 }
 
 }  // namespace ballbar::device

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "ballbar/analysis/types.hpp"
+#include "ballbar/fileio/output.hpp"
 #include "ballbar/report/report.hpp"
 #include "circular.hpp"
 #include "document.hpp"
@@ -237,19 +238,26 @@ cairo_status_t discard(void*, const unsigned char*, unsigned int) {
     return CAIRO_STATUS_SUCCESS;
 }
 
+cairo_status_t append(void* closure, const unsigned char* data, unsigned int length) {
+    static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
+    return CAIRO_STATUS_SUCCESS;
+}
+
 }  // namespace
 
-int render_pdf(const Report& report, const std::string& path) {
-    // First pass into nowhere to count the pages for the footers, second pass into the file.
+std::string render_pdf_bytes(const Report& report, int* pages_out) {
+    // First pass into nowhere to count the pages for the footers, second pass into memory.
     SurfacePtr counting(cairo_pdf_surface_create_for_stream(discard, nullptr, Document::kWidth, Document::kHeight),
                         cairo_surface_destroy);
     const int pages = layout(counting.get(), report, 0);
     cairo_surface_finish(counting.get());
 
-    SurfacePtr surface(cairo_pdf_surface_create(path.c_str(), Document::kWidth, Document::kHeight),
+    std::string pdf;
+    SurfacePtr surface(cairo_pdf_surface_create_for_stream(append, &pdf, Document::kWidth, Document::kHeight),
                        cairo_surface_destroy);
     if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
-        throw ReportError("cannot write " + path + ": " + cairo_status_to_string(cairo_surface_status(surface.get())));
+        throw ReportError(std::string("cannot render the PDF: ") +
+                          cairo_status_to_string(cairo_surface_status(surface.get())));
     cairo_pdf_surface_set_metadata(
         surface.get(), CAIRO_PDF_METADATA_TITLE,
         ("Ball-bar session report, session " + std::to_string(report.header.session_id)).c_str());
@@ -258,8 +266,21 @@ int render_pdf(const Report& report, const std::string& path) {
     const int written = layout(surface.get(), report, pages);
     cairo_surface_finish(surface.get());
     if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
-        throw ReportError("cannot write " + path + ": " + cairo_status_to_string(cairo_surface_status(surface.get())));
-    return written;
+        throw ReportError(std::string("cannot render the PDF: ") +
+                          cairo_status_to_string(cairo_surface_status(surface.get())));
+    if (pages_out) *pages_out = written;
+    return pdf;
+}
+
+int render_pdf(const Report& report, const std::string& path) {
+    int pages = 0;
+    const std::string pdf = render_pdf_bytes(report, &pages);
+    try {
+        fileio::write_file(path, "--out", pdf);
+    } catch (const fileio::FileError& e) {
+        throw ReportError(e.what());
+    }
+    return pages;
 }
 
 }  // namespace ballbar::report

@@ -13,6 +13,7 @@
 #include "ballbar/analysis/decimal_text.hpp"
 #include "ballbar/analysis/kinematics.hpp"
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/fileio/input.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
 namespace ballbar::storage {
@@ -22,35 +23,56 @@ using nlohmann::json;
 
 constexpr std::string_view kMagic = "# ballbar-readings/1";
 
-/// Splits text into lines (LF or CRLF), remembering where each starts.
+/// Lines (LF or CRLF) from a fetch function, with one line of lookahead. A line stays valid until the
+/// next call of next() or peek() fetches another.
 class LineReader {
   public:
-    explicit LineReader(std::string_view text) : text_(text) {}
-    bool done() const { return pos_ >= text_.size(); }
-    int line() const { return line_; }  // number of the line next() returns
-    std::string_view peek() const { return cut(pos_).first; }
-    std::string_view next() {
-        auto [line, end] = cut(pos_);
-        pos_ = end;
-        ++line_;
-        return line;
+    explicit LineReader(ReadingsStream::Fetch fetch) : fetch_(std::move(fetch)) {}
+    bool done() {
+        fill();
+        return !pending_;
     }
-    std::size_t pos() const { return pos_; }
-    void seek(std::size_t pos, int line) { pos_ = pos, line_ = line; }
-    std::string_view text() const { return text_; }
+    int line() const { return line_; }  // number of the line next() returns
+    std::string_view peek() {
+        fill();
+        return pending_ ? current_ : std::string_view();
+    }
+    std::string_view next() {
+        fill();
+        if (!pending_) return {};
+        pending_ = false;
+        ++line_;
+        return current_;
+    }
 
   private:
-    std::pair<std::string_view, std::size_t> cut(std::size_t from) const {
-        std::size_t nl = text_.find('\n', from);
-        std::size_t end = nl == std::string_view::npos ? text_.size() : nl + 1;
-        std::string_view line = text_.substr(from, (nl == std::string_view::npos ? text_.size() : nl) - from);
-        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        return {line, end};
+    void fill() {
+        if (pending_ || eof_) return;
+        if (const auto l = fetch_()) {
+            current_ = *l;
+            pending_ = true;
+        } else {
+            eof_ = true;
+        }
     }
-    std::string_view text_;
-    std::size_t pos_ = 0;
+    ReadingsStream::Fetch fetch_;
+    std::string_view current_;
+    bool pending_ = false, eof_ = false;
     int line_ = 1;
 };
+
+/// Lines of text held in memory.
+ReadingsStream::Fetch text_lines(std::string_view text) {
+    return [text, pos = std::size_t{0}]() mutable -> std::optional<std::string_view> {
+        if (pos >= text.size()) return std::nullopt;
+        const std::size_t nl = text.find('\n', pos);
+        const std::size_t stop = nl == std::string_view::npos ? text.size() : nl;
+        std::string_view line = text.substr(pos, stop - pos);
+        pos = nl == std::string_view::npos ? text.size() : nl + 1;
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        return line;
+    };
+}
 
 std::string_view trim(std::string_view s) {
     while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -297,14 +319,30 @@ bool header_line(std::string_view line, int lineno, Header& h, std::map<std::str
 
 }  // namespace
 
-ReadingsFile parse_readings(std::string_view text) {
-    if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 byte-order mark
-    LineReader in(text);
+struct ReadingsStream::Impl {
+    explicit Impl(Fetch fetch) : in(std::move(fetch)) {}
+    std::optional<fileio::LineReader> file;  // when reading a file: the source of `in`
+    LineReader in;
+    ReadingsMetadata metadata;
+    analysis::MachineGeometry machine;
+    std::vector<std::string> warnings;
+    std::vector<std::string> names;  // the column row
+    std::vector<ColumnSpec> specs;
+    std::vector<int> index;
+    std::vector<std::string> fields;
+    std::size_t count = 0;
+    bool first = true;
+    void header();
+    bool next(analysis::Reading& r, double& nominal_mm, std::optional<NominalMismatch>& mismatch);
+};
+
+void ReadingsStream::Impl::header() {
     if (in.done()) throw ReadingsFileError(1, "empty file; expected \"# ballbar-readings/1\"");
-    const std::string_view first = in.next();
-    if (first != kMagic) {
-        if (first.rfind("# ballbar-readings/", 0) == 0) {
-            throw ReadingsFileError(1, "unsupported format version \"" + std::string(first.substr(2)) +
+    std::string_view first_line = in.next();
+    if (first_line.substr(0, 3) == "\xEF\xBB\xBF") first_line.remove_prefix(3);  // UTF-8 byte-order mark
+    if (first_line != kMagic) {
+        if (first_line.rfind("# ballbar-readings/", 0) == 0) {
+            throw ReadingsFileError(1, "unsupported format version \"" + fileio::cut(first_line.substr(2)) +
                                            "\"; this ballbar reads ballbar-readings/1");
         }
         throw ReadingsFileError(1, "not a readings file: line 1 must be \"# ballbar-readings/1\"");
@@ -313,7 +351,6 @@ ReadingsFile parse_readings(std::string_view text) {
     Header h;
     std::map<std::string, int> seen;
     int columns_line = 0;
-    std::vector<std::string> names;
     while (!in.done()) {
         const int lineno = in.line();
         const std::string_view line = in.peek();
@@ -336,14 +373,13 @@ ReadingsFile parse_readings(std::string_view text) {
     }
     if (columns_line == 0) throw ReadingsFileError(in.line(), "no column header row and no readings");
 
-    ReadingsFile out;
-    out.set.machine = *h.machine;
-    out.metadata = std::move(h.meta);
-    out.warnings = std::move(h.warnings);
+    machine = *h.machine;
+    metadata = std::move(h.meta);
+    warnings = std::move(h.warnings);
 
     // Map columns by name.
-    const auto specs = columns_for(out.set.machine.type);
-    std::vector<int> index(static_cast<std::size_t>(Col::count), -1);
+    specs = columns_for(machine.type);
+    index.assign(static_cast<std::size_t>(Col::count), -1);
     std::vector<std::string> unknown;
     for (std::size_t i = 0; i < names.size(); ++i) {
         const std::string& name = names[i];
@@ -358,7 +394,8 @@ ReadingsFile parse_readings(std::string_view text) {
         }
         if (!matched) {
             for (const auto& u : unknown) {
-                if (u == name) throw ReadingsFileError(columns_line, "column \"" + name + "\" appears twice");
+                if (u == name)
+                    throw ReadingsFileError(columns_line, "column \"" + fileio::cut(name) + "\" appears twice");
             }
             unknown.push_back(name);
         }
@@ -366,7 +403,7 @@ ReadingsFile parse_readings(std::string_view text) {
     for (const auto& spec : specs) {
         if (spec.required && index[static_cast<std::size_t>(spec.col)] < 0) {
             throw ReadingsFileError(columns_line, "required column \"" + spec.name + "\" is missing (a " +
-                                                      std::string(analysis::to_string(out.set.machine.type)) +
+                                                      std::string(analysis::to_string(machine.type)) +
                                                       " file needs X_mm, Y_mm, Z_mm, " + specs[3].name + ", " +
                                                       specs[4].name +
                                                       ", socket_x_mm, socket_y_mm, socket_z_mm, measured_mm)");
@@ -374,13 +411,17 @@ ReadingsFile parse_readings(std::string_view text) {
     }
     if (!unknown.empty()) {
         std::string list;
-        for (const auto& u : unknown) list += (list.empty() ? "\"" : ", \"") + u + "\"";
-        out.warnings.push_back("line " + std::to_string(columns_line) + ": unknown column" +
-                               (unknown.size() > 1 ? "s " : " ") + list + " ignored");
+        for (std::size_t i = 0; i < unknown.size() && i < 20; ++i)
+            list += (list.empty() ? "\"" : ", \"") + fileio::cut(unknown[i]) + "\"";
+        if (unknown.size() > 20) list += ", …";
+        warnings.push_back("line " + std::to_string(columns_line) + ": unknown column" +
+                           (unknown.size() > 1 ? "s " : " ") + list + " ignored");
     }
+}
 
-    const auto rot = analysis::rotary_axes(out.set.machine.type);
-    std::vector<std::string> fields;
+bool ReadingsStream::Impl::next(analysis::Reading& r, double& nominal_mm, std::optional<NominalMismatch>& mismatch) {
+    const auto rot = analysis::rotary_axes(machine.type);
+    mismatch.reset();
     while (!in.done()) {
         const int lineno = in.line();
         const std::string_view line = in.peek();
@@ -419,7 +460,7 @@ ReadingsFile parse_readings(std::string_view text) {
             const auto v = parse_number(*f);
             if (!v) {
                 throw ReadingsFileError(
-                    lineno, "column \"" + name_of(c) + "\": \"" + std::string(*f) + "\" is not a finite number");
+                    lineno, "column \"" + name_of(c) + "\": \"" + fileio::cut(*f) + "\" is not a finite number");
             }
             const ColumnRange r = range_of(c);
             const std::string why = r.above_lo ? analysis::limits::check_above(*v, r.lo, r.hi, r.unit)
@@ -431,14 +472,14 @@ ReadingsFile parse_readings(std::string_view text) {
             const auto v = number(c);
             if (!v) return std::nullopt;
             if (*v != std::floor(*v) || *v < min || *v > max) {
-                throw ReadingsFileError(lineno, "column \"" + name_of(c) + "\": " + std::string(*field(c)) +
+                throw ReadingsFileError(lineno, "column \"" + name_of(c) + "\": " + fileio::cut(*field(c)) +
                                                     " is not an integer in [" + std::to_string(min) + ", " +
                                                     std::to_string(max) + "]");
             }
             return static_cast<int>(*v);
         };
 
-        analysis::Reading r;
+        r = analysis::Reading{};
         r.pose.X_mm = *number(Col::X);
         r.pose.Y_mm = *number(Col::Y);
         r.pose.Z_mm = *number(Col::Z);
@@ -456,24 +497,99 @@ ReadingsFile parse_readings(std::string_view text) {
         r.n = integer(Col::n, 1, 2'000'000'000).value_or(0);
         r.std_mm = number(Col::std_mm);
 
-        const double nominal = analysis::nominal_length(out.set.machine, r.pose, r.socket_mm);
-        if (const auto given = number(Col::nominal); given && std::abs(*given - nominal) > kNominalTolerance_mm) {
-            out.nominal_mismatches.push_back({lineno, out.set.readings.size(), *given, nominal});
+        nominal_mm = analysis::nominal_length(machine, r.pose, r.socket_mm);
+        if (const auto given = number(Col::nominal); given && std::abs(*given - nominal_mm) > kNominalTolerance_mm) {
+            mismatch = NominalMismatch{lineno, count, *given, nominal_mm};
         }
+        ++count;
+        return true;
+    }
+    if (count == 0) throw ReadingsFileError(in.line(), "the file has no readings");
+    return false;
+}
+
+ReadingsStream::ReadingsStream(Fetch fetch) : impl_(std::make_unique<Impl>(std::move(fetch))) {
+    try {
+        impl_->header();
+    } catch (const fileio::FileError& e) {  // a line too long, a read error
+        throw ReadingsFileError(0, e.what());
+    }
+}
+
+ReadingsStream ReadingsStream::open(const std::filesystem::path& path) {
+    try {
+        fileio::LineReader lines(fileio::InputFile::open(path.string(), "readings file"));
+        auto owned = std::make_shared<fileio::LineReader>(std::move(lines));
+        return ReadingsStream([owned] { return owned->next(); });
+    } catch (const fileio::FileError& e) {
+        throw ReadingsFileError(0, e.what());
+    }
+}
+
+ReadingsStream::ReadingsStream(ReadingsStream&&) noexcept = default;
+ReadingsStream& ReadingsStream::operator=(ReadingsStream&&) noexcept = default;
+ReadingsStream::~ReadingsStream() = default;
+
+const analysis::MachineGeometry& ReadingsStream::machine() const {
+    return impl_->machine;
+}
+const ReadingsMetadata& ReadingsStream::metadata() const {
+    return impl_->metadata;
+}
+const std::vector<std::string>& ReadingsStream::warnings() const {
+    return impl_->warnings;
+}
+std::size_t ReadingsStream::count() const {
+    return impl_->count;
+}
+
+bool ReadingsStream::next(analysis::Reading& reading, double& nominal_mm, std::optional<NominalMismatch>& mismatch) {
+    try {
+        return impl_->next(reading, nominal_mm, mismatch);
+    } catch (const fileio::FileError& e) {  // a line too long, a read error
+        throw ReadingsFileError(0, e.what());
+    }
+}
+
+namespace {
+
+ReadingsFile collect(ReadingsStream& stream) {
+    ReadingsFile out;
+    out.set.machine = stream.machine();
+    out.metadata = stream.metadata();
+    out.warnings = stream.warnings();
+    analysis::Reading r;
+    double nominal = 0;
+    std::optional<NominalMismatch> mismatch;
+    while (stream.next(r, nominal, mismatch)) {
+        if (mismatch) out.nominal_mismatches.push_back(*mismatch);
         out.nominal_mm.push_back(nominal);
         out.set.readings.push_back(r);
     }
-    if (out.set.readings.empty()) throw ReadingsFileError(in.line(), "the file has no readings");
     return out;
 }
 
+}  // namespace
+
+ReadingsFile parse_readings(std::string_view text) {
+    ReadingsStream stream(text_lines(text));
+    return collect(stream);
+}
+
 ReadingsFile read_readings_file(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw ReadingsFileError(0, "cannot open " + path.string());
-    std::ostringstream buf;
-    buf << in.rdbuf();
-    if (in.bad()) throw ReadingsFileError(0, "cannot read " + path.string());
-    return parse_readings(std::move(buf).str());  // the text itself, not a copy
+    try {
+        const fileio::InputFile f = fileio::InputFile::open(path.string(), "readings file");
+        if (f.size() > fileio::kMaxTextBytes) {
+            throw ReadingsFileError(0, "the readings file " + path.string() + " is too large to analyse (" +
+                                           std::to_string(f.size() >> 20) + " MiB; at most " +
+                                           std::to_string(fileio::kMaxTextBytes >> 20) +
+                                           " MiB are read; `ballbar import` streams files of any length)");
+        }
+    } catch (const fileio::FileError& e) {
+        throw ReadingsFileError(0, e.what());
+    }
+    ReadingsStream stream = ReadingsStream::open(path);
+    return collect(stream);
 }
 
 }  // namespace ballbar::storage

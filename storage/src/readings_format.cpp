@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ballbar/analysis/kinematics.hpp"
+#include "ballbar/fileio/output.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/readings_file.hpp"
 
@@ -115,19 +116,10 @@ std::string format_readings(const analysis::ReadingSet& set, const ReadingsMetad
 void write_readings_file(const std::filesystem::path& path, const analysis::ReadingSet& set,
                          const ReadingsMetadata& metadata) {
     const std::string text = format_readings(set, metadata);
-    const std::filesystem::path tmp = path.string() + ".tmp";
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw std::runtime_error("cannot write " + tmp.string());
-        out << text;
-        out.flush();
-        if (!out) throw std::runtime_error("cannot write " + tmp.string());
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-        std::filesystem::remove(tmp, ec);
-        throw std::runtime_error("cannot write " + path.string());
+    try {  // an exclusive temporary file renamed over `path`; never through a symlink
+        fileio::write_file(path.string(), "output", text);
+    } catch (const fileio::FileError& e) {
+        throw std::runtime_error(e.what());
     }
 }
 

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "ballbar/fileio/output.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
 namespace ballbar::storage {
@@ -197,13 +198,10 @@ void export_csv(Store& store, std::int64_t id, const std::filesystem::path& dir)
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
-    auto write = [&](const char* name, auto&& fn) {
-        const auto path = dir / name;
-        std::ofstream out(path, std::ios::binary | std::ios::trunc);
-        if (!out) throw std::runtime_error("cannot write " + path.string());
+    auto write = [&](const char* name, auto&& fn) {  // fileio: exclusive temporary file, no links
+        fileio::OutputStream out((dir / name).string(), "--out");
         fn(out);
-        out.flush();
-        if (!out) throw std::runtime_error("cannot write " + path.string());
+        out.commit();
     };
     write("points.csv", [&](std::ostream& o) { write_points_csv(store, id, o); });
     write("samples.csv", [&](std::ostream& o) { write_samples_csv(store, id, o); });

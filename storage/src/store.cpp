@@ -229,6 +229,11 @@ void Store::check_file(const std::string& path) const {
         if (options_.read_only) throw StorageError(Kind::not_found, "no database at " + path);
         return;
     }
+    const auto status = std::filesystem::status(path, ec);
+    if (std::filesystem::is_directory(status))
+        throw StorageError(Kind::corrupt, "the database " + path + " is a directory");
+    if (!ec && !std::filesystem::is_regular_file(status))  // a FIFO or /dev/zero would block or never end
+        throw StorageError(Kind::corrupt, "the database " + path + " is not a regular file; not changed");
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) throw StorageError(Kind::sqlite, "cannot read " + path + ": " + ec.message());
     if (size == 0) return;  // an empty file is a new database

@@ -266,18 +266,15 @@ std::vector<analysis::BarSample> Store::samples(std::int64_t session_id, std::ui
     return out;
 }
 
-std::int64_t Store::add_point(std::int64_t session_id, const PointRecord& p) {
-    Transaction tx(db_);
-    state_of(session_id);  // throws not_found
-    auto next = db_.prepare("SELECT coalesce(max(idx) + 1, 0) FROM points WHERE session_id = ?");
-    next.bind(1, session_id);
-    next.step();
-    const std::int64_t idx = next.column_int(0);
+namespace {
+
+constexpr std::string_view kInsertPoint =
+    "INSERT INTO points(session_id, idx, location, point, step, X_mm, Y_mm, Z_mm, A_rad, B_rad, C_rad, "
+    "socket_x_mm, socket_y_mm, socket_z_mm, nominal_mm, mean_mm, std_mm, n, first_seq, last_seq, time_s, "
+    "bar_temp_C, air_temp_C, machine_temp_C) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)";
+
+void bind_point(Statement& st, std::int64_t session_id, std::int64_t idx, const PointRecord& p) {
     const auto& r = p.reading;
-    auto st = db_.prepare(
-        "INSERT INTO points(session_id, idx, location, point, step, X_mm, Y_mm, Z_mm, A_rad, B_rad, C_rad, "
-        "socket_x_mm, socket_y_mm, socket_z_mm, nominal_mm, mean_mm, std_mm, n, first_seq, last_seq, time_s, "
-        "bar_temp_C, air_temp_C, machine_temp_C) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
     st.bind(1, session_id).bind(2, idx).bind(3, r.location).bind(4, r.point).bind(5, r.step);
     st.bind(6, r.pose.X_mm).bind(7, r.pose.Y_mm).bind(8, r.pose.Z_mm);
     st.bind(9, r.pose.A_rad).bind(10, r.pose.B_rad).bind(11, r.pose.C_rad);
@@ -286,9 +283,38 @@ std::int64_t Store::add_point(std::int64_t session_id, const PointRecord& p) {
     st.bind(19, p.first_seq ? std::optional<std::int64_t>(to_db(*p.first_seq)) : std::nullopt);
     st.bind(20, p.last_seq ? std::optional<std::int64_t>(to_db(*p.last_seq)) : std::nullopt);
     st.bind(21, r.time_s).bind(22, r.bar_temp_C).bind(23, r.air_temp_C).bind(24, r.machine_temp_C);
+}
+
+}  // namespace
+
+std::int64_t Store::add_point(std::int64_t session_id, const PointRecord& p) {
+    Transaction tx(db_);
+    state_of(session_id);  // throws not_found
+    auto next = db_.prepare("SELECT coalesce(max(idx) + 1, 0) FROM points WHERE session_id = ?");
+    next.bind(1, session_id);
+    next.step();
+    const std::int64_t idx = next.column_int(0);
+    auto st = db_.prepare(kInsertPoint);
+    bind_point(st, session_id, idx, p);
     st.run();
     tx.commit();
     return idx;
+}
+
+void Store::add_points(std::int64_t session_id, const std::vector<PointRecord>& points) {
+    if (points.empty()) return;
+    Transaction tx(db_);
+    state_of(session_id);  // throws not_found
+    auto next = db_.prepare("SELECT coalesce(max(idx) + 1, 0) FROM points WHERE session_id = ?");
+    next.bind(1, session_id);
+    next.step();
+    std::int64_t idx = next.column_int(0);
+    auto st = db_.prepare(kInsertPoint);
+    for (const auto& p : points) {
+        bind_point(st, session_id, idx++, p);
+        st.run();
+    }
+    tx.commit();
 }
 
 std::vector<PointRecord> Store::points(std::int64_t session_id) {

@@ -12,6 +12,7 @@
 
 #include "ballbar/analysis/decimal_text.hpp"
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/fileio/input.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/sqlite.hpp"
 
@@ -315,11 +316,13 @@ TraceFile parse_trace(std::string_view text) {
 }
 
 TraceFile read_trace_file(const std::filesystem::path& path) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw TraceFileError(0, "cannot open " + path.string());
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return parse_trace(ss.str());
+    std::string text;
+    try {  // at most 256 MiB, lines of at most 1 MiB; a directory, a FIFO or a device is refused
+        text = fileio::read_text(path.string(), "trace file");
+    } catch (const fileio::FileError& e) {
+        throw TraceFileError(0, e.what());
+    }
+    return parse_trace(text);
 }
 
 std::string format_trace(const TraceFile& t) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <string_view>
 
 namespace ballbar::analysis {
@@ -14,5 +15,13 @@ namespace ballbar::analysis {
 /// returns true; returns false, leaving `pos`, for anything else (a sign, more digits, a second
 /// point, a point without digits after it, an exponent): from_chars reads those.
 bool read_short_decimal(std::string_view text, std::size_t& pos, double& value);
+
+/// True when text[pos] starts an exponent ("e308", "E-5") right after a number: NC numbers have none,
+/// so "X1e308" is a malformed number, not an X word followed by an E word.
+bool exponent_at(std::string_view text, std::size_t pos);
+
+/// A token of the user's text for an error message: at most `max_chars` bytes (at a UTF-8 boundary),
+/// "…" appended when cut.
+std::string shown_token(std::string_view token, std::size_t max_chars = 40);
 
 }  // namespace ballbar::analysis

@@ -215,8 +215,11 @@ void set_circular_tolerance(Report& report, double tolerance_um);
 /// The same content as data (schema "ballbar-report/1", docs/report.md).
 nlohmann::json to_json(const Report& report);
 
-/// Renders the report as a vector PDF on A4 pages. Throws ReportError if the file cannot be written.
+/// Renders the report as a vector PDF on A4 pages. Throws ReportError if the file cannot be written
+/// (written through fileio::OutputFile: a temporary file renamed over `path`, never through a symlink).
 /// Returns the number of pages.
 int render_pdf(const Report& report, const std::string& path);
+/// The same PDF as bytes, for the caller to write; `pages` receives the number of pages.
+std::string render_pdf_bytes(const Report& report, int* pages = nullptr);
 
 }  // namespace ballbar::report

@@ -5,6 +5,9 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -59,9 +62,38 @@ struct ReadingsFile {
 
 inline constexpr double kNominalTolerance_mm = 0.001;
 
+/// A readings file read one reading at a time, in memory independent of its length (what `import`
+/// uses): the header is parsed on construction, then next() yields each reading with its recomputed
+/// nominal length. Throws ReadingsFileError (line 0 when the file cannot be opened or read, or a line
+/// is longer than fileio::kMaxLineBytes).
+class ReadingsStream {
+  public:
+    /// The next line (LF and CR removed) or nothing at the end; valid until the next call.
+    using Fetch = std::function<std::optional<std::string_view>()>;
+    explicit ReadingsStream(Fetch fetch);
+    /// Streams the file at `path` (a regular file: fileio::InputFile).
+    static ReadingsStream open(const std::filesystem::path& path);
+    ReadingsStream(ReadingsStream&&) noexcept;
+    ReadingsStream& operator=(ReadingsStream&&) noexcept;
+    ~ReadingsStream();
+
+    const analysis::MachineGeometry& machine() const;
+    const ReadingsMetadata& metadata() const;
+    const std::vector<std::string>& warnings() const;  ///< from the header and the column row
+    /// The next reading, or false at the end (a file without readings throws). `mismatch` is set when
+    /// the row's nominal_mm differs from `nominal_mm` by more than kNominalTolerance_mm.
+    bool next(analysis::Reading& reading, double& nominal_mm, std::optional<NominalMismatch>& mismatch);
+    std::size_t count() const;  ///< readings returned so far
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
 /// Parses a whole file held in memory. Throws ReadingsFileError.
 ReadingsFile parse_readings(std::string_view text);
-/// Reads and parses `path`. Throws ReadingsFileError (line 0 when the file cannot be opened).
+/// Reads and parses `path` into memory: at most fileio::kMaxTextBytes (256 MiB; larger files are
+/// refused: import streams them). Throws ReadingsFileError (line 0 when the file cannot be opened).
 ReadingsFile read_readings_file(const std::filesystem::path& path);
 
 /// The file for `set`, with `metadata` in the header. Numbers are written with the shortest text that

@@ -242,6 +242,8 @@ class Store {
     // Points -----------------------------------------------------------------------------------------
     /// Appends a point; returns its index within the session.
     std::int64_t add_point(std::int64_t session_id, const PointRecord& point);
+    /// Appends points in order, in one transaction with one prepared statement (an import's batches).
+    void add_points(std::int64_t session_id, const std::vector<PointRecord>& points);
     std::vector<PointRecord> points(std::int64_t session_id);
 
     // Results and models ------------------------------------------------------------------------------

@@ -1,0 +1,124 @@
+// SPDX-License-Identifier: MIT
+// fileio inputs: regular files only, size caps checked before reading, lines streamed with a maximum
+// length, whatever the chunk boundaries.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ballbar/fileio/input.hpp"
+
+using namespace ballbar::fileio;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Dir {
+    fs::path path;
+    Dir() {
+        char tmpl[] = "/tmp/ballbar-fileio-XXXXXX";
+        path = ::mkdtemp(tmpl);
+    }
+    ~Dir() { fs::remove_all(path); }
+    std::string write(const std::string& name, const std::string& text) const {
+        std::ofstream(path / name, std::ios::binary) << text;
+        return (path / name).string();
+    }
+};
+
+std::string refusal(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const FileError& e) {
+        EXPECT_EQ(e.kind(), FileError::Kind::refused) << e.what();
+        return e.what();
+    }
+    ADD_FAILURE() << "not refused";
+    return {};
+}
+
+std::vector<std::string> lines_of(const std::string& path, std::size_t max_line = kMaxLineBytes) {
+    LineReader r(InputFile::open(path, "test file"), max_line);
+    std::vector<std::string> out;
+    while (auto l = r.next()) out.emplace_back(*l);
+    return out;
+}
+
+TEST(FileioInput, RegularFilesOnly) {
+    Dir d;
+    EXPECT_NE(refusal([&] { InputFile::open(d.path.string(), "readings file"); }).find("is a directory"),
+              std::string::npos);
+    EXPECT_NE(refusal([&] { InputFile::open("/dev/zero", "readings file"); }).find("a character device"),
+              std::string::npos);
+    ASSERT_EQ(::mkfifo((d.path / "fifo").c_str(), 0600), 0);
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_NE(refusal([&] { InputFile::open((d.path / "fifo").string(), "plan file"); }).find("a FIFO"),
+              std::string::npos);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(2)) << "a FIFO nobody writes never blocks";
+    EXPECT_NE(refusal([&] { InputFile::open((d.path / "nope").string(), "plan file"); }).find("no such plan file"),
+              std::string::npos);
+}
+
+TEST(FileioInput, SizeCapIsCheckedBeforeReading) {
+    Dir d;
+    { std::ofstream(d.path / "sparse"); }
+    fs::resize_file(d.path / "sparse", 10ull << 30);  // 10 GB of holes
+    const std::string msg = refusal([&] { read_whole((d.path / "sparse").string(), "machine file", kMaxJsonBytes); });
+    EXPECT_NE(msg.find("too large"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("16 MiB"), std::string::npos) << msg;
+    const std::string small = d.write("small", std::string(100, 'x'));
+    EXPECT_EQ(read_whole(small, "f", 100).size(), 100u);
+    EXPECT_NE(refusal([&] { read_whole(small, "f", 99); }).find("too large"), std::string::npos);
+    EXPECT_EQ(read_whole(d.write("empty", ""), "f", 10), "");
+    EXPECT_EQ(read_head(small, "f", 7), "xxxxxxx");
+}
+
+TEST(FileioInput, LinesWithLfCrlfAndNoFinalNewline) {
+    Dir d;
+    EXPECT_EQ(lines_of(d.write("a", "one\ntwo\r\n\nthree")), (std::vector<std::string>{"one", "two", "", "three"}));
+    EXPECT_EQ(lines_of(d.write("b", "")), std::vector<std::string>{});
+    EXPECT_EQ(lines_of(d.write("c", "\n")), std::vector<std::string>{""});
+}
+
+TEST(FileioInput, LinesAcrossEveryBufferBoundary) {
+    Dir d;
+    // Line lengths around the 64 KiB read size, so lines straddle every kind of boundary.
+    std::string text;
+    std::vector<std::string> expected;
+    for (std::size_t n : {0u, 1u, 65534u, 65535u, 65536u, 65537u, 3u, 200000u, 7u}) {
+        expected.emplace_back(n, static_cast<char>('a' + n % 26));
+        text += expected.back() + (n % 2 ? "\r\n" : "\n");
+    }
+    EXPECT_EQ(lines_of(d.write("big", text)), expected);
+}
+
+TEST(FileioInput, ALineLongerThanTheLimitIsRefusedWithItsNumber) {
+    Dir d;
+    const std::string path = d.write("long", "ok\nok\n" + std::string(1001, 'z') + "\nok\n");
+    LineReader r(InputFile::open(path, "trace file"), 1000);
+    EXPECT_EQ(*r.next(), "ok");
+    EXPECT_EQ(*r.next(), "ok");
+    const std::string msg = refusal([&] { r.next(); });
+    EXPECT_NE(msg.find("line 3 is longer than 1000 bytes"), std::string::npos) << msg;
+    // Exactly the limit (with a CR) is fine; a long last line without LF is refused too.
+    EXPECT_EQ(lines_of(d.write("edge", std::string(1000, 'y') + "\r\n"), 1000).at(0).size(), 1000u);
+    EXPECT_NE(refusal([&] { lines_of(d.write("tail", std::string(1001, 'y')), 1000); }).find("line 1"),
+              std::string::npos);
+    const std::string text_msg = refusal([&] { read_text(path, "NC program", 1 << 20, 1000); });
+    EXPECT_NE(text_msg.find("line 3"), std::string::npos) << text_msg;
+}
+
+TEST(FileioInput, CutKeepsUtf8Whole) {
+    EXPECT_EQ(cut("short"), "short");
+    EXPECT_EQ(cut(std::string(100, 'a')), std::string(40, 'a') + "…");
+    const std::string mu = std::string(39, 'a') + "µµ";  // µ is 2 bytes: byte 40 is inside it
+    EXPECT_EQ(cut(mu), std::string(39, 'a') + "…");
+}
+
+}  // namespace
