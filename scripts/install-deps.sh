@@ -24,7 +24,7 @@ packages=(
   umockdev libumockdev-dev libglib2.0-dev  # fake USB/HID/tty devices so the real libraries run in tests
   sqlite3                     # the sqlite3 shell: benchmark comparison, inspection
   poppler-utils               # pdftotext/pdfinfo: report tests
-  clang libclang-rt-14-dev    # libFuzzer target for the protocol decoder
+  clang libclang-rt-14-dev    # libFuzzer targets of every parser (fuzz/, scripts/fuzz.sh)
   # packaging
   help2man                    # man pages generated from the commands' own --help
   lintian                     # checks the Debian package (CI)
