@@ -93,7 +93,8 @@ int run_import_trace(const ImportOptions& o, const Content& c, const Globals& gl
 /// file's length); an invalid line anywhere stores nothing.
 int run_import(const ImportOptions& o, const Globals& globals) {
     const Content c = hash_file(o.file);
-    if (storage::looks_like_trace(fileio::read_head(o.file, "file to import", 64))) return run_import_trace(o, c, globals);
+    if (storage::looks_like_trace(fileio::read_head(o.file, "file to import", 64)))
+        return run_import_trace(o, c, globals);
     std::optional<storage::ReadingsStream> stream;
     try {
         stream.emplace(storage::ReadingsStream::open(o.file));

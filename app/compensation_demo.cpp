@@ -250,12 +250,12 @@ int run_compensation_demo(const CompensationDemoOptions& opt, std::ostream& out,
                  {"identifiable_true", identifiable(*e.param)},
                  {"std", e.std},
                  {"observable", e.observable},
-                 {"sigma_from_true", e.std > 0 ? nlohmann::json(std::abs(e.estimate - truth[*e.param]) / e.std)
-                                               : nlohmann::json(nullptr)},
+                 {"sigma_from_true",
+                  e.std > 0 ? nlohmann::json(std::abs(e.estimate - truth[*e.param]) / e.std) : nlohmann::json(nullptr)},
                  // |estimate − identifiable| / std; over 5 the text output flags it
-                 {"sigma_from_identifiable",
-                  e.std > 0 ? nlohmann::json(std::abs(e.estimate - identifiable(*e.param)) / e.std)
-                            : nlohmann::json(nullptr)}});
+                 {"sigma_from_identifiable", e.std > 0
+                                                 ? nlohmann::json(std::abs(e.estimate - identifiable(*e.param)) / e.std)
+                                                 : nlohmann::json(nullptr)}});
         }
         j["unobservable"] = nlohmann::json::array();
         for (const auto& s : plan.unreachable) j["unobservable"].push_back(s);

@@ -81,7 +81,8 @@ std::string circular_program(const circ::TestSpec& t, analysis::NcDialect dialec
             out += sg > 0 ? "G3" : "G2";
             for (int j : {ax[0], ax[1]}) out += word(letters[j], to[static_cast<std::size_t>(j)]);
             for (int j : {ax[0], ax[1]})
-                out += word(centre_words[j], t.centre_mm[static_cast<std::size_t>(j)] - from[static_cast<std::size_t>(j)]);
+                out +=
+                    word(centre_words[j], t.centre_mm[static_cast<std::size_t>(j)] - from[static_cast<std::size_t>(j)]);
             out += word('F', t.feed_mm_min) + '\n';
             a = b;
         }

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/storage/imports.hpp"
 
+#include <nettle/sha2.h>
+
 #include <array>
 #include <cstdint>
-
-#include <nettle/sha2.h>
 
 #include "ballbar/storage/sqlite.hpp"
 

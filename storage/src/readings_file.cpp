@@ -462,9 +462,9 @@ bool ReadingsStream::Impl::next(analysis::Reading& r, double& nominal_mm, std::o
                 throw ReadingsFileError(
                     lineno, "column \"" + name_of(c) + "\": \"" + fileio::cut(*f) + "\" is not a finite number");
             }
-            const ColumnRange r = range_of(c);
-            const std::string why = r.above_lo ? analysis::limits::check_above(*v, r.lo, r.hi, r.unit)
-                                               : analysis::limits::check_in(*v, r.lo, r.hi, r.unit);
+            const ColumnRange range = range_of(c);
+            const std::string why = range.above_lo ? analysis::limits::check_above(*v, range.lo, range.hi, range.unit)
+                                                   : analysis::limits::check_in(*v, range.lo, range.hi, range.unit);
             if (!why.empty()) throw ReadingsFileError(lineno, "column \"" + name_of(c) + "\" " + why);
             return v;
         };

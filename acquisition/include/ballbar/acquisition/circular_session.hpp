@@ -90,8 +90,8 @@ struct CircularSummary {
     int attempts = 0;
     std::size_t samples = 0;
     std::size_t duplicates_dropped = 0;
-    std::size_t gaps = 0;            ///< holes in the stream (lost frames), kept or not
-    std::size_t lost_samples = 0;    ///< samples those holes lost, by their sequence numbers
+    std::size_t gaps = 0;          ///< holes in the stream (lost frames), kept or not
+    std::size_t lost_samples = 0;  ///< samples those holes lost, by their sequence numbers
     std::size_t pauses = 0;
     std::optional<CircularAttempt> good;
     std::vector<analysis::circular::TraceSample> trace;  ///< the good attempt's samples

@@ -4,13 +4,13 @@
 // import` refuses it and names the session it duplicates; docs/storage.md).
 #pragma once
 
+#include <nettle/sha2.h>
+
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <nettle/sha2.h>
 
 #include "ballbar/storage/store.hpp"
 
@@ -19,13 +19,13 @@ namespace ballbar::storage {
 /// SHA-256 (FIPS 180-4, computed by libnettle) fed in pieces, so a file can be hashed while it is
 /// streamed.
 class Sha256 {
-public:
+  public:
     Sha256();
     void update(std::string_view bytes);
     /// The digest of everything fed so far as 64 lower-case hex digits; starts a new hash.
     std::string hex();
 
-private:
+  private:
     sha256_ctx ctx_;
 };
 
