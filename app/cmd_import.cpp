@@ -87,14 +87,12 @@ std::string mismatch_summary(const storage::ImportedReadings& r) {
            "): the producer's geometry or conventions may disagree with this file's machine header";
 }
 
-int run_import_trace(const ImportOptions& o, const Content& c, const Globals& globals);
+int run_import_trace(const ImportOptions& o, const Globals& globals);
 
 /// Streams the file into the database in batches, in one transaction (memory independent of the
 /// file's length); an invalid line anywhere stores nothing.
 int run_import(const ImportOptions& o, const Globals& globals) {
-    const Content c = hash_file(o.file);
-    if (storage::looks_like_trace(fileio::read_head(o.file, "file to import", 64)))
-        return run_import_trace(o, c, globals);
+    if (storage::looks_like_trace(fileio::read_head(o.file, "file to import", 64))) return run_import_trace(o, globals);
     std::optional<storage::ReadingsStream> stream;
     try {
         stream.emplace(storage::ReadingsStream::open(o.file));
@@ -105,12 +103,15 @@ int run_import(const ImportOptions& o, const Globals& globals) {
     try {
         storage::Store store(resolve_db_path(globals));
         storage::Transaction tx(store.db());
-        const auto duplicates = check_duplicate(store, c, o);
         try {
             r = storage::import_readings_stream(store, *stream, o.file);
         } catch (const storage::ReadingsFileError& e) {
             throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
         }
+        // Hashed once the file has proved a readings file (a 10 GB file of zeros is refused at its first
+        // line, not read through); a duplicate rolls the import back.
+        const Content c = hash_file(o.file);
+        const auto duplicates = check_duplicate(store, c, o);
         storage::record_import(store, r.session, c.sha256, o.file, c.bytes);
         tx.commit();
         for (const auto& w : r.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
@@ -137,7 +138,7 @@ int run_import(const ImportOptions& o, const Globals& globals) {
 }
 
 /// A ballbar-trace/1 file: a circular session (procedure "circular") with every sample.
-int run_import_trace(const ImportOptions& o, const Content& c, const Globals& globals) {
+int run_import_trace(const ImportOptions& o, const Globals& globals) {
     storage::TraceFile trace;
     try {
         trace = storage::read_trace_file(o.file);
@@ -145,6 +146,7 @@ int run_import_trace(const ImportOptions& o, const Content& c, const Globals& gl
         throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
     }
     for (const auto& w : trace.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
+    const Content c = hash_file(o.file);  // a valid trace, so at most the trace reader's cap
     try {
         storage::Store store(resolve_db_path(globals));
         storage::Transaction tx(store.db());

@@ -110,7 +110,7 @@ TEST(CliExitCodes, EveryRefusedCommandLineExits2AndCreatesNoDatabase) {
         // Inputs.
         {"import nonexist.readings", 2, "nonexist.readings"},
         {"import " + data("readings/invalid/bad_magic.csv"), 2, "nothing imported"},
-        {"solve ssm --input missing-request.json", 2, "cannot read missing-request.json"},
+        {"solve ssm --input missing-request.json", 2, "no such request file: missing-request.json"},
         // Instruments.
         {"monitor --device bogus:x --seconds 1", 2, "bad device URI"},
         {"monitor --seconds 1", 2, "--device"},
