@@ -6,11 +6,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 
 #include "ballbar/acquisition/circle_program.hpp"
 #include "ballbar/acquisition/machine_file.hpp"
@@ -71,13 +69,9 @@ circ::TestSpec plan_test(const PlanOptions& o) {
     return t;
 }
 
+/// Numbers in messages as the part program writes them (4 decimals, trailing zeros dropped).
 std::string num(double v) {
-    std::ostringstream os;
-    os << std::fixed << std::setprecision(4) << v;
-    std::string s = os.str();
-    while (!s.empty() && s.back() == '0') s.pop_back();
-    if (!s.empty() && s.back() == '.') s.pop_back();
-    return s == "-0" ? "0" : s;
+    return acquisition::nc_number(v);
 }
 
 /// --rate: refuses a feed whose samples lie too far apart along the path for the diagnosis
