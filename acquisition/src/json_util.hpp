@@ -15,7 +15,7 @@ namespace ballbar::acquisition::detail {
 inline nlohmann::json parse_json(std::string_view text, const std::string& what) {
     try {
         return nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for a number past double
         throw PlanError(what + ": not valid JSON (" + e.what() + ")");
     }
 }

@@ -59,7 +59,9 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"travel_1e308", R"("travel":{"X_mm":[-1e308,1e308]})", "travel.X_mm[0] = -1e+308"},
                       Case{"travel_rotary_1e308", R"("travel":{"C_deg":[0,1e308]})", "travel.C_deg[1] = 1e+308"},
                       Case{"pivot_1e308", R"("a_pivot_mm":[1e308,0,0])", "a_pivot_mm[0] = 1e+308"},
-                      Case{"tool_ball_minus_1e6", R"("tool_ball_mm":[0,0,-1e6])", "tool_ball_mm[2] = -1000000"}),
+                      Case{"tool_ball_minus_1e6", R"("tool_ball_mm":[0,0,-1e6])", "tool_ball_mm[2] = -1000000"},
+                      // found by fuzz_machine_file: a number past double escaped as nlohmann's out_of_range
+                      Case{"number_past_double", R"("travel":{"X_mm":[-844444443E88888,0]})", "not valid JSON"}),
     [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(MachineFile, TheProjectsOwnMachineFilesStayValid) {
