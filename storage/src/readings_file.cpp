@@ -498,6 +498,12 @@ bool ReadingsStream::Impl::next(analysis::Reading& r, double& nominal_mm, std::o
         r.std_mm = number(Col::std_mm);
 
         nominal_mm = analysis::nominal_length(machine, r.pose, r.socket_mm);
+        // Each coordinate may be in range and the bar they span still not: a reading whose nominal length
+        // is no ball-bar's would also be refused when the file is written back.
+        if (const std::string why = analysis::limits::check_above(nominal_mm, 0, analysis::limits::kLength_mm, "mm");
+            !why.empty()) {
+            throw ReadingsFileError(lineno, "the nominal bar length (from the pose and socket) " + why);
+        }
         if (const auto given = number(Col::nominal); given && std::abs(*given - nominal_mm) > kNominalTolerance_mm) {
             mismatch = NominalMismatch{lineno, count, *given, nominal_mm};
         }

@@ -81,6 +81,20 @@ INSTANTIATE_TEST_SUITE_P(
         Row{"n_zero", "n", "0", "is not an integer"}),
     [](const auto& param_info) { return std::string(param_info.param.name); });
 
+// Every coordinate in range, the bar they span not: found by fuzz_readings (CI, 2026-12-02), where such a
+// file was accepted but refused when written back (the written nominal_mm column is out of range).
+TEST(ReadingsRanges, APoseSpanningABarBeyondAnyBarIsRefused) {
+    try {
+        parse_readings(file_with("X_mm", "10050"));
+        FAIL() << "a 10 m bar was accepted";
+    } catch (const ReadingsFileError& e) {
+        EXPECT_EQ(e.line(), 4);
+        EXPECT_NE(std::string(e.what()).find("nominal bar length (from the pose and socket) = 10"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("must be > 0 and <= 10000 mm"), std::string::npos) << e.what();
+    }
+}
+
 TEST(ReadingsRanges, AMachineHeaderBeyondAnyMachineIsRefused) {
     std::string text = file_with("", "");
     text.replace(text.find("\"tool_ball_mm\":[0,0,0]"), 22, "\"tool_ball_mm\":[0,0,1e308]");
