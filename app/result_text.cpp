@@ -116,7 +116,8 @@ std::vector<std::string> discovery_lines(const json& j) {
     for (const auto& st : j["steps"]) {
         if (!st.is_object() || st.value("kind", "") != "library") continue;
         const std::string effect = st.value("effect", "?");
-        ScreenUnit u{1, st.value("unit", "")};
+        const std::string unit = st.value("unit", "");  // outlives u, which only views it
+        ScreenUnit u{1, unit};
         if (const auto p = ba::parse_param(st.value("iso", ""))) u = screen_unit(ba::param_info(*p).unit);
         out.push_back(effect + " " +
                       with_uncertainty(num(st, "estimate") * u.factor, num(st, "stderr") * u.factor, u.symbol) +
