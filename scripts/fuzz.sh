@@ -6,11 +6,17 @@
 #   scripts/fuzz.sh          # 10 minutes a target
 #   scripts/fuzz.sh 25       # what CI runs (.ci/run)
 # Extra libFuzzer flags can be given in FUZZ_FLAGS (e.g. FUZZ_FLAGS=-jobs=2); FUZZ_TARGETS="a b" runs only
-# those targets and builds only them.
+# those targets and builds only them. FUZZ_RUNS=N stops each target after N inputs (SECONDS stays a cap):
+# with a fixed -seed that is the same inputs on a fast or a slow machine, where a time limit is not.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-600}
 case $seconds in '' | *[!0-9]*) echo "usage: scripts/fuzz.sh [SECONDS]" >&2; exit 2 ;; esac
+runs_flag=
+if [ -n "${FUZZ_RUNS:-}" ]; then
+  case $FUZZ_RUNS in *[!0-9]*) echo "FUZZ_RUNS must be a number of inputs" >&2; exit 2 ;; esac
+  runs_flag=-runs=$FUZZ_RUNS
+fi
 
 targets=(fuzz_decoder)
 for dir in fuzz/corpus/*/; do targets+=("$(basename "$dir")"); done
@@ -37,7 +43,7 @@ for t in "${targets[@]}"; do
   log=$work/$t.log
   # -rss_limit_mb: far above any parser's needs; -max_len: inputs up to 64 KiB (files, programs).
   if ! (cd "$work" && "$OLDPWD/$exe" -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 \
-        -print_final_stats=1 ${FUZZ_FLAGS:-} "$corpus" >"$log" 2>&1); then
+        -print_final_stats=1 $runs_flag ${FUZZ_FLAGS:-} "$corpus" >"$log" 2>&1); then
     echo "$t: FOUND A PROBLEM (log: $log)" >&2
     tail -n 40 "$log" >&2
     status=1
