@@ -1,5 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <cstdio>
@@ -114,6 +117,14 @@ std::optional<std::string> unknown_command(const CLI::App& root, int argc, char*
 
 int main(int argc, char** argv) {
     using namespace ballbar::app;
+#if defined(__GLIBC__)
+    // An analysis asks for large buffers (10⁵ samples: a 10 MB design matrix, an FFT's buffers) and
+    // frees them within one command; glibc would give each back to the kernel and fault the next one's
+    // pages in again, page by page (a sixth of `circle analyze`'s time, bench/circular). Kept in the
+    // heap for reuse instead: a command lives seconds, or holds little.
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
     CLI::App root{"ballbar: guided ball-bar measurement and error analysis of five-axis machine tools", "ballbar"};
     root.set_version_flag("--version", std::string("ballbar ") + ballbar::kVersion);
     root.require_subcommand(1);

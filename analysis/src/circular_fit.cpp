@@ -87,6 +87,8 @@ struct Design {
     Eigen::MatrixXd buffer;  ///< rows × the most columns a design has: allocated once, reused by every build
     Eigen::Index used = 0;   ///< columns in use
     Eigen::VectorXd y;
+    double vib_f_hz = 0.0;  ///< the frequency vib_sin and vib_cos are for
+    std::vector<double> vib_sin, vib_cos;
     auto x() { return buffer.leftCols(used); }
     auto x() const { return buffer.leftCols(used); }
     int col(int id) const {
@@ -125,6 +127,9 @@ class Model {
         double lo = in.points.front().t, hi = lo;
         for (const auto& p : in.points) lo = std::min(lo, p.t), hi = std::max(hi, p.t);
         t_mid_ = 0.5 * (lo + hi);
+        for (std::size_t i = 1; i < in.points.size(); ++i)
+            if (in.points[i].run == in.points[i - 1].run)
+                path_mm_ += r_ * std::abs(in.points[i].theta - in.points[i - 1].theta);
     }
 
     /// The axes' steady-state response to the circle through first-order lags: amplitude and phase.
@@ -147,6 +152,9 @@ class Model {
         return 1e3 * r_ * (std::sqrt(c * c + s * s) - 1.0);
     }
 
+    /// The design for the state `st` and the columns `ids`, and the data less the lag's deviation.
+    /// Rows in blocks: first what several columns share, for a block of points, then each column's
+    /// block in one loop (the columns are stored apart, so each loop writes one run of memory).
     void build(const State& st, const std::vector<int>& ids, Design& d) const {
         const auto n = static_cast<Eigen::Index>(in_.points.size());
         d.ids = ids;
@@ -154,7 +162,8 @@ class Model {
         if (d.buffer.rows() != n || d.buffer.cols() < m) d.buffer.resize(n, std::max<Eigen::Index>(m, kDf + 1));
         d.used = m;
         d.y.resize(n);
-        const bool servo = std::find(ids.begin(), ids.end(), kServo) != ids.end();
+        auto has = [&](int id) { return std::find(ids.begin(), ids.end(), id) != ids.end(); };
+        const bool servo = has(kServo);
         const double tp = std::max(st.tau_mean_s + 0.5e-3 * st.dtau_ms, 0.0);
         const double tq = std::max(st.tau_mean_s - 0.5e-3 * st.dtau_ms, 0.0);
         const Lag lag0 = lag_of(tp, tq);
@@ -164,111 +173,138 @@ class Model {
         const double phm = std::atan(w_ * st.tau_mean_s);
         const double cm = std::cos(phm), sm = std::sin(phm);
         const double php = std::atan(w_ * tp), phq = std::atan(w_ * tq);
-        auto has = [&](int id) { return std::find(ids.begin(), ids.end(), id) != ids.end(); };
         // The periodic terms' sine and cosine once per point for all their columns (values, derivatives).
         const bool cyc_p = has(kCycPs) || has(kCycPc) || has(kDkP);
         const bool cyc_q = has(kCycQs) || has(kCycQc) || has(kDkQ);
         const bool vib = has(kVibS) || has(kVibC) || has(kDf);
-        for (Eigen::Index i = 0; i < n; ++i) {
-            const FitPoint& pt = in_.points[static_cast<std::size_t>(i)];
-            const double c0 = cos_[static_cast<std::size_t>(i)], s0 = sin_[static_cast<std::size_t>(i)];
-            const int dir = pt.dir;
-            // cos and sin of θ − dir·φ for the mean lag and for each axis's own.
-            const double ca = c0 * cm + dir * s0 * sm, sa = s0 * cm - dir * c0 * sm;
-            const double cpx = c0 * lag0.cp + dir * s0 * lag0.sp, spx = s0 * lag0.cp - dir * c0 * lag0.sp;
-            const double cqx = c0 * lag0.cq + dir * s0 * lag0.sq, sqx = s0 * lag0.cq - dir * c0 * lag0.sq;
-            const double thp = pt.theta - dir * php, thq = pt.theta - dir * phq;
-            const double lag = lag_um(c0, s0, dir, lag0);
-            double servo_col = 0.0;
-            if (servo) servo_col = (lag_um(c0, s0, dir, lag_hi) - lag_um(c0, s0, dir, lag_lo)) / (2.0 * h_ms);
-            d.y[i] = pt.y_um - (lag - servo_col * st.dtau_ms);
-            // Cyclic phases about the centre: the same family as about the origin, better conditioned in k.
-            const double xp = r_ * cpx, xq = r_ * sqx;
-            const double tc = pt.t - t_mid_;
-            const double start = pt.theta - pt.dir * pt.travelled;
-            double sin_p = 0.0, cos_p = 0.0, sin_q = 0.0, cos_q = 0.0, sin_v = 0.0, cos_v = 0.0;
-            if (cyc_p) {
-                const double a = 2.0 * kPi * st.kp * xp;
-                sin_p = std::sin(a), cos_p = std::cos(a);
+        // The vibration's phase depends on time and frequency only: kept while the frequency is.
+        if (vib && !(d.vib_f_hz == st.f_hz && d.vib_sin.size() == in_.points.size())) {
+            d.vib_f_hz = st.f_hz;
+            d.vib_sin.resize(in_.points.size()), d.vib_cos.resize(in_.points.size());
+            for (std::size_t i = 0; i < in_.points.size(); ++i) {
+                const double a = 2.0 * kPi * st.f_hz * (in_.points[i].t - t_mid_);
+                d.vib_sin[i] = std::sin(a), d.vib_cos[i] = std::cos(a);
             }
-            if (cyc_q) {
-                const double a = 2.0 * kPi * st.kq * xq;
-                sin_q = std::sin(a), cos_q = std::cos(a);
+        }
+        constexpr Eigen::Index kBlock = 256;
+        double ca[kBlock], sa[kBlock], spx[kBlock], cqx[kBlock], xp[kBlock], xq[kBlock], servo_col[kBlock];
+        double sin_p[kBlock], cos_p[kBlock], sin_q[kBlock], cos_q[kBlock];
+        for (Eigen::Index b0 = 0; b0 < n; b0 += kBlock) {
+            const Eigen::Index len = std::min(kBlock, n - b0);
+            const FitPoint* pts = in_.points.data() + b0;
+            for (Eigen::Index j = 0; j < len; ++j) {
+                const FitPoint& pt = pts[j];
+                const auto i = static_cast<std::size_t>(b0 + j);
+                const double c0 = cos_[i], s0 = sin_[i];
+                const int dir = pt.dir;
+                // cos and sin of θ − dir·φ for the mean lag and for each axis's own.
+                ca[j] = c0 * cm + dir * s0 * sm, sa[j] = s0 * cm - dir * c0 * sm;
+                const double cpx = c0 * lag0.cp + dir * s0 * lag0.sp;
+                spx[j] = s0 * lag0.cp - dir * c0 * lag0.sp;
+                cqx[j] = c0 * lag0.cq + dir * s0 * lag0.sq;
+                const double sqx = s0 * lag0.cq - dir * c0 * lag0.sq;
+                const double lag = lag_um(c0, s0, dir, lag0);
+                servo_col[j] = 0.0;
+                if (servo) servo_col[j] = (lag_um(c0, s0, dir, lag_hi) - lag_um(c0, s0, dir, lag_lo)) / (2.0 * h_ms);
+                d.y[b0 + j] = pt.y_um - (lag - servo_col[j] * st.dtau_ms);
+                // Cyclic phases about the centre: the same family as about the origin, better conditioned in k.
+                xp[j] = r_ * cpx, xq[j] = r_ * sqx;
+                if (cyc_p) {
+                    const double a = 2.0 * kPi * st.kp * xp[j];
+                    sin_p[j] = std::sin(a), cos_p[j] = std::cos(a);
+                }
+                if (cyc_q) {
+                    const double a = 2.0 * kPi * st.kq * xq[j];
+                    sin_q[j] = std::sin(a), cos_q[j] = std::cos(a);
+                }
             }
-            if (vib) {
-                const double a = 2.0 * kPi * st.f_hz * tc;
-                sin_v = std::sin(a), cos_v = std::cos(a);
-            }
-            for (std::size_t c = 0; c < ids.size(); ++c) {
-                double v = 0.0;
-                switch (ids[c]) {
+            const double* vs = vib ? d.vib_sin.data() + b0 : nullptr;
+            const double* vc = vib ? d.vib_cos.data() + b0 : nullptr;
+            for (Eigen::Index c = 0; c < m; ++c) {
+                double* col = d.buffer.col(c).data() + b0;
+                switch (ids[static_cast<std::size_t>(c)]) {
                     case kConst:
-                        v = 1.0;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = 1.0;
                         break;
                     case kCos:
-                        v = ca;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = ca[j];
                         break;
                     case kSin:
-                        v = sa;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = sa[j];
                         break;
                     case kBlP:
-                        v = 0.5 * pt.dir * (spx >= 0.0 ? 1.0 : -1.0) * ca;
+                        for (Eigen::Index j = 0; j < len; ++j)
+                            col[j] = 0.5 * pts[j].dir * (spx[j] >= 0.0 ? 1.0 : -1.0) * ca[j];
                         break;
                     case kBlQ:
-                        v = -0.5 * pt.dir * (cqx >= 0.0 ? 1.0 : -1.0) * sa;
+                        for (Eigen::Index j = 0; j < len; ++j)
+                            col[j] = -0.5 * pts[j].dir * (cqx[j] >= 0.0 ? 1.0 : -1.0) * sa[j];
                         break;
                     case kSpP:
-                        v = spike_value(thp, pt.dir, start, w_) * ca;
+                        for (Eigen::Index j = 0; j < len; ++j) {
+                            const FitPoint& pt = pts[j];
+                            const double start = pt.theta - pt.dir * pt.travelled;
+                            col[j] = spike_value(pt.theta - pt.dir * php, pt.dir, start, w_) * ca[j];
+                        }
                         break;
                     case kSpQ:
-                        v = spike_value(thq - 0.5 * kPi, pt.dir, start - 0.5 * kPi, w_) * sa;
+                        for (Eigen::Index j = 0; j < len; ++j) {
+                            const FitPoint& pt = pts[j];
+                            const double start = pt.theta - pt.dir * pt.travelled;
+                            col[j] =
+                                spike_value(pt.theta - pt.dir * phq - 0.5 * kPi, pt.dir, start - 0.5 * kPi, w_) * sa[j];
+                        }
                         break;
                     case kScale:
-                        v = r_ * 1e-3 * 0.5 * (ca * ca - sa * sa);
+                        for (Eigen::Index j = 0; j < len; ++j)
+                            col[j] = r_ * 1e-3 * 0.5 * (ca[j] * ca[j] - sa[j] * sa[j]);
                         break;
                     case kSquare:
-                        v = 1e-3 * (cq_ + r_ * sa) * ca;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = 1e-3 * (cq_ + r_ * sa[j]) * ca[j];
                         break;
                     case kServo:
-                        v = servo_col;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = servo_col[j];
                         break;
                     case kStrP:
-                        v = ca * ca * sa;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = ca[j] * ca[j] * sa[j];
                         break;
                     case kStrQ:
-                        v = sa * sa * ca;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = sa[j] * sa[j] * ca[j];
                         break;
                     case kCycPs:
-                        v = sin_p * ca;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = sin_p[j] * ca[j];
                         break;
                     case kCycPc:
-                        v = cos_p * ca;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = cos_p[j] * ca[j];
                         break;
                     case kCycQs:
-                        v = sin_q * sa;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = sin_q[j] * sa[j];
                         break;
                     case kCycQc:
-                        v = cos_q * sa;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = cos_q[j] * sa[j];
                         break;
                     case kVibS:
-                        v = sin_v;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = vs[j];
                         break;
                     case kVibC:
-                        v = cos_v;
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = vc[j];
                         break;
                     case kDkP:
-                        v = 2.0 * kPi * xp * (st.ap_s * cos_p - st.ap_c * sin_p) * ca;
+                        for (Eigen::Index j = 0; j < len; ++j)
+                            col[j] = 2.0 * kPi * xp[j] * (st.ap_s * cos_p[j] - st.ap_c * sin_p[j]) * ca[j];
                         break;
                     case kDkQ:
-                        v = 2.0 * kPi * xq * (st.aq_s * cos_q - st.aq_c * sin_q) * sa;
+                        for (Eigen::Index j = 0; j < len; ++j)
+                            col[j] = 2.0 * kPi * xq[j] * (st.aq_s * cos_q[j] - st.aq_c * sin_q[j]) * sa[j];
                         break;
                     case kDf:
-                        v = 2.0 * kPi * tc * (st.av_s * cos_v - st.av_c * sin_v);
+                        for (Eigen::Index j = 0; j < len; ++j)
+                            col[j] = 2.0 * kPi * (pts[j].t - t_mid_) * (st.av_s * vc[j] - st.av_c * vs[j]);
                         break;
                     default:
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = 0.0;
                         break;
                 }
-                d.buffer(i, static_cast<Eigen::Index>(c)) = v;
             }
         }
     }
@@ -283,16 +319,18 @@ class Model {
         return axis == 0 ? std::cos(th) : std::sin(th);
     }
     double radius() const { return r_; }
+    /// Axis travel along the data, at most (|dp| ≤ R dθ).
+    double path_mm() const { return path_mm_; }
     double t_mid() const { return t_mid_; }
 
   private:
     const FitInput& in_;
-    double r_, w_, cp_ = 0.0, cq_ = 0.0, t_mid_ = 0.0;
+    double r_, w_, cp_ = 0.0, cq_ = 0.0, t_mid_ = 0.0, path_mm_ = 0.0;
     std::vector<double> cos_, sin_;
 };
 
-Solution solve(const Design& d) {
-    Solution s;
+/// Least squares on the design, into `s` (its vectors reused from the last solve: no new n-long ones).
+void solve(const Design& d, Solution& s) {
     const Eigen::Index m = d.x().cols(), n = d.x().rows();
     Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m, m);
     a.selfadjointView<Eigen::Lower>().rankUpdate(d.x().transpose());
@@ -302,12 +340,12 @@ Solution solve(const Design& d) {
     const Eigen::VectorXd b = scale.asDiagonal() * (d.x().transpose() * d.y);
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(as);
     s.beta = scale.asDiagonal() * ldlt.solve(b);
-    s.residual = d.y - d.x() * s.beta;
+    s.residual = d.y;
+    s.residual.noalias() -= d.x() * s.beta;  // in place: no n-long temporary
     const double rss = s.residual.squaredNorm();
     s.rms = std::sqrt(rss / static_cast<double>(std::max<Eigen::Index>(n, 1)));
     const double var = rss / static_cast<double>(std::max<Eigen::Index>(n - m, 1));
     s.cov = var * (scale.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(m, m)) * scale.asDiagonal());
-    return s;
 }
 
 std::string col_name(int id, Plane plane) {
@@ -388,6 +426,39 @@ struct Peak {
     bool found = false;
 };
 
+/// The sums of one grid frequency's 2×2 fit: sin², sin·cos, cos², y·sin, y·cos (each weighted).
+struct GridSums {
+    double ss = 0, sc = 0, cc = 0, ys = 0, yc = 0;
+};
+constexpr std::size_t kGridBlock = 1;
+
+/// The sums of NB successive grid frequencies in one pass over the points, two points at a time in
+/// the two lanes of a packet (SSE2 on any x86-64): each point's phasor (zr, zi) is turned by one grid
+/// step (sr, si) after each frequency. m is even (the arrays are padded with a point of weight 0, which
+/// adds exactly nothing). Each lane sums half the points; the halves are added at the end.
+template <std::size_t NB>
+void grid_sums(std::size_t m, const double* w, const double* y, const double* sr, const double* si, double* zr,
+               double* zi, GridSums* out) {
+    using Lane = Eigen::Array2d;
+    struct Acc {
+        Lane ss = Lane::Zero(), sc = Lane::Zero(), cc = Lane::Zero(), ys = Lane::Zero(), yc = Lane::Zero();
+    };
+    Acc acc[NB];
+    for (std::size_t i = 0; i < m; i += 2) {
+        Lane re = Lane::Map(zr + i), im = Lane::Map(zi + i);
+        const Lane wi = Lane::Map(w + i), yi = Lane::Map(y + i), c_step = Lane::Map(sr + i), s_step = Lane::Map(si + i);
+        for (std::size_t j = 0; j < NB; ++j) {
+            const Lane s = im * wi, c = re * wi;
+            acc[j].ss += s * s, acc[j].sc += s * c, acc[j].cc += c * c, acc[j].ys += yi * s, acc[j].yc += yi * c;
+            const Lane re_next = re * c_step - im * s_step, im_next = re * s_step + im * c_step;
+            re = re_next, im = im_next;
+        }
+        Lane::Map(zr + i) = re, Lane::Map(zi + i) = im;
+    }
+    for (std::size_t j = 0; j < NB; ++j)
+        out[j] = {acc[j].ss.sum(), acc[j].sc.sum(), acc[j].cc.sum(), acc[j].ys.sum(), acc[j].yc.sum()};
+}
+
 /// Searches the residual for a cyclic error of one axis: 2×2 fits over a grid of spatial
 /// frequencies (a rotating phasor per point makes each step a multiplication), then golden section.
 Peak search_cyclic(const FitInput& in, const Model& model, const State& st, const Eigen::VectorXd& resid, int axis,
@@ -397,11 +468,8 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
     const double kmin = 4.0 / r, kmax = 1.0 / opt.min_pitch_mm;
     if (kmin >= kmax) return peak;
     const std::size_t n = in.points.size();
-    // Axis travel along the data (|dp| ≤ R dθ): the search samples each cycle at least 6 times.
-    double path = 0.0;
-    for (std::size_t i = 1; i < n; ++i)
-        if (in.points[i].run == in.points[i - 1].run) path += r * std::abs(in.points[i].theta - in.points[i - 1].theta);
-    const double wanted = std::max(2000.0, 6.0 * kmax * path);
+    // The search samples each cycle at least 6 times along the axis travel.
+    const double wanted = std::max(2000.0, 6.0 * kmax * model.path_mm());
     const std::size_t stride = std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(n) / wanted));
     std::vector<double> x, w, y;
     for (std::size_t i = 0; i < n; i += stride) {
@@ -426,24 +494,32 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
     const double dk = 1.0 / (8.0 * r);
     // A rotating phasor per point (real and imaginary parts apart: plain multiplications, no complex
     // library calls), advanced by one grid step each pass.
-    std::vector<double> zr(m), zi(m), sr(m), si(m);
+    // Even length for the two lanes of grid_sums: a last point of weight 0 if m is odd.
+    const std::size_t m2 = m + (m % 2);
+    w.resize(m2, 0.0), y.resize(m2, 0.0);
+    std::vector<double> zr(m2, 1.0), zi(m2, 0.0), sr(m2, 1.0), si(m2, 0.0);
     for (std::size_t i = 0; i < m; ++i) {
         zr[i] = std::cos(2.0 * kPi * kmin * x[i]), zi[i] = std::sin(2.0 * kPi * kmin * x[i]);
         sr[i] = std::cos(2.0 * kPi * dk * x[i]), si[i] = std::sin(2.0 * kPi * dk * x[i]);
     }
-    double best = -1.0, best_k = kmin;
-    for (double k = kmin; k <= kmax; k += dk) {
-        double sss = 0, ssc = 0, scc = 0, sys = 0, syc = 0;
-        for (std::size_t i = 0; i < m; ++i) {
-            const double s = zi[i] * w[i], c = zr[i] * w[i];
-            sss += s * s, ssc += s * c, scc += c * c, sys += y[i] * s, syc += y[i] * c;
-            const double re = zr[i] * sr[i] - zi[i] * si[i], im = zr[i] * si[i] + zi[i] * sr[i];
-            zr[i] = re, zi[i] = im;
+    std::vector<double> grid;
+    for (double k = kmin; k <= kmax; k += dk) grid.push_back(k);
+    std::vector<GridSums> sums(grid.size());
+    for (std::size_t g = 0; g < grid.size(); g += kGridBlock) {
+        if (grid.size() - g >= kGridBlock) {
+            grid_sums<kGridBlock>(m2, w.data(), y.data(), sr.data(), si.data(), zr.data(), zi.data(), &sums[g]);
+        } else {
+            for (std::size_t h = g; h < grid.size(); ++h)
+                grid_sums<1>(m2, w.data(), y.data(), sr.data(), si.data(), zr.data(), zi.data(), &sums[h]);
         }
+    }
+    double best = -1.0, best_k = kmin;
+    for (std::size_t g = 0; g < grid.size(); ++g) {
+        const auto& [sss, ssc, scc, sys, syc] = sums[g];
         const double det = sss * scc - ssc * ssc;
         if (det <= 0.0) continue;
         const double red = ((scc * sys - ssc * syc) * sys + (sss * syc - ssc * sys) * syc) / det;
-        if (red > best) best = red, best_k = k;
+        if (red > best) best = red, best_k = grid[g];
     }
     double lo = std::max(kmin, best_k - dk), hi = std::min(kmax, best_k + dk);
     const double gr = (std::sqrt(5.0) - 1.0) / 2.0;
@@ -552,7 +628,7 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
     Solution sol;
     auto run_fit = [&](const std::vector<int>& cols) {
         model.build(st, cols, d);
-        sol = solve(d);
+        solve(d, sol);
         const int sv = d.col(kServo);
         if (sv >= 0) st.dtau_ms = sol.beta[sv];
         update_tau_mean();

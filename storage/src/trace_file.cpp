@@ -2,6 +2,7 @@
 // ballbar-trace/1: parse (whole or refused with line and problem), write, store as a session, load.
 #include "ballbar/storage/trace_file.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -126,22 +127,32 @@ circ::TestSpec test_from_json(const json& j) {
     return t;
 }
 
-/// The lines of `text` (views into it), without their line ends.
-std::vector<std::string_view> split_lines(std::string_view text) {
-    std::vector<std::string_view> lines;
-    std::size_t start = 0;
-    while (start <= text.size()) {
-        const auto end = text.find('\n', start);
-        std::string_view line =
-            text.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
+/// The lines of `text` one at a time (views into it, without their line ends; the empty line after a
+/// final line end is not one), numbered from 1. No vector of them: a trace has 10⁵ lines or more.
+class LineCursor {
+  public:
+    explicit LineCursor(std::string_view text) : text_(text) {}
+    bool next(std::string_view& line) {
+        if (pos_ >= text_.size()) return false;
+        const auto end = text_.find('\n', pos_);
+        line = text_.substr(pos_, end == std::string_view::npos ? std::string_view::npos : end - pos_);
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        lines.push_back(line);
-        if (end == std::string_view::npos) break;
-        start = end + 1;
+        pos_ = end == std::string_view::npos ? text_.size() : end + 1;
+        ++number_;
+        return true;
     }
-    if (!lines.empty() && lines.back().empty()) lines.pop_back();
-    return lines;
-}
+    int number() const { return number_; }  ///< of the line next() gave last
+    std::size_t lines_left() const {        ///< at most; to reserve
+        return static_cast<std::size_t>(
+                   std::count(text_.begin() + static_cast<std::ptrdiff_t>(pos_), text_.end(), '\n')) +
+               1;
+    }
+
+  private:
+    std::string_view text_;
+    std::size_t pos_ = 0;
+    int number_ = 0;
+};
 
 bool is_key(std::string_view k) {
     if (k.empty()) return false;
@@ -171,23 +182,26 @@ std::string test_json(const circ::TestSpec& t) {
 }
 
 TraceFile parse_trace(std::string_view text) {
-    const auto lines = split_lines(text);
-    if (lines.empty()) throw TraceFileError(1, "empty file");
-    if (lines[0] != kMagic) {
-        if (lines[0].rfind("# ballbar-trace/", 0) == 0)
+    LineCursor lines(text);
+    std::string_view line;
+    if (!lines.next(line)) throw TraceFileError(1, "empty file");
+    if (line != kMagic) {
+        if (line.rfind("# ballbar-trace/", 0) == 0)
             throw TraceFileError(
-                1, "unsupported format version \"" + std::string(lines[0].substr(2)) + "\" (this is ballbar-trace/1)");
+                1, "unsupported format version \"" + std::string(line.substr(2)) + "\" (this is ballbar-trace/1)");
         throw TraceFileError(1, "not a ballbar-trace/1 file (the first line must be \"# ballbar-trace/1\")");
     }
     TraceFile out;
     bool have_test = false;
     std::vector<std::string> seen;
-    std::size_t i = 1;
-    for (; i < lines.size(); ++i) {
-        const std::string_view line = lines[i];
-        const int no = static_cast<int>(i + 1);
+    bool have_column_row = false;
+    while (lines.next(line)) {
+        const int no = lines.number();
         if (line.empty()) continue;
-        if (line[0] != '#') break;
+        if (line[0] != '#') {
+            have_column_row = true;
+            break;
+        }
         const std::string_view body = trim(line.substr(1));
         const auto colon = body.find(':');
         if (colon == std::string_view::npos || !is_key(body.substr(0, colon))) continue;  // a comment
@@ -231,16 +245,16 @@ TraceFile parse_trace(std::string_view text) {
             out.extra.emplace_back(key, j.dump());
         }
     }
-    if (i >= lines.size()) throw TraceFileError(static_cast<int>(lines.size()), "no column row and no data");
-    const int header_no = static_cast<int>(i + 1);
+    if (!have_column_row) throw TraceFileError(lines.number(), "no column row and no data");
+    const int header_no = lines.number();
     if (!have_test) throw TraceFileError(header_no, "no \"# test: {…}\" header before the column row");
     // Column row.
     std::vector<std::string> cols;
     {
-        std::stringstream ss{std::string(lines[i])};
+        std::stringstream ss{std::string(line)};
         std::string c;
         while (std::getline(ss, c, ',')) cols.emplace_back(trim(c));
-        if (!lines[i].empty() && lines[i].back() == ',') cols.emplace_back();
+        if (!line.empty() && line.back() == ',') cols.emplace_back();
     }
     int c_time = -1, c_len = -1, c_bar = -1, c_air = -1;
     std::vector<std::string> unknown;
@@ -267,10 +281,9 @@ TraceFile parse_trace(std::string_view text) {
         out.warnings.push_back("unknown column(s) " + list + " ignored");
     }
     std::vector<std::string_view> fields;
-    out.samples.reserve(lines.size() - i);
-    for (++i; i < lines.size(); ++i) {
-        const std::string_view line = lines[i];
-        const int no = static_cast<int>(i + 1);
+    out.samples.reserve(lines.lines_left());
+    while (lines.next(line)) {
+        const int no = lines.number();
         if (trim(line).empty()) continue;
         if (line[0] == '#') throw TraceFileError(no, "a header line after the column row");
         fields.clear();
