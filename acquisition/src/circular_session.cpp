@@ -8,6 +8,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include "instrument_link.hpp"
+
 namespace ballbar::acquisition {
 
 namespace circ = analysis::circular;
@@ -16,7 +18,6 @@ using analysis::BarSample;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr int kLinkRetries = 3;
 
 std::string fmt(double v, int digits) {
     std::ostringstream os;
@@ -56,7 +57,13 @@ std::string circular_instrument_mismatch(const circ::TestSpec& test, const Instr
 
 CircularSession::CircularSession(circ::TestSpec test, SampleSource& source, CircularSink& sink, Operator& op,
                                  CircularOptions options)
-    : test_(std::move(test)), source_(source), sink_(sink), op_(op), options_(options) {}
+    : test_(std::move(test)), source_(source), sink_(sink), op_(op), options_(options) {
+    link_ = std::make_unique<detail::InstrumentLink>(
+        source, op, detail::InstrumentLink::Settings{options.read_timeout, options.max_reconnect_attempts},
+        [this] { check_stop(); }, [this](const std::string& reason) { end_interrupted(reason); });
+}
+
+CircularSession::~CircularSession() = default;
 
 void CircularSession::fire(Event e, const std::string& detail) {
     const State from = sm_.state();
@@ -79,67 +86,6 @@ void CircularSession::check_stop() {
     if (options_.stop && options_.stop->load()) end_interrupted("interrupted by the operator");
 }
 
-void CircularSession::reference() {
-    for (;;) {
-        check_stop();
-        if (op_.confirm("reference", "Put the bar in its calibrator to set the reference (zero). Ready?")) break;
-        const std::size_t c = op_.choose({"reference-declined",
-                                          "The instrument must be referenced before it measures. Ask again, or stop "
-                                          "the session (resumable)?",
-                                          {"again", "stop"},
-                                          0});
-        if (c == 1) end_interrupted("reference not set");
-    }
-    for (int attempt = 1;; ++attempt) {
-        try {
-            source_.set_reference();
-            return;
-        } catch (const SourceError& err) {
-            if (attempt >= kLinkRetries) end_interrupted(std::string("setting the reference failed: ") + err.what());
-            op_.message(std::string("Setting the reference failed (") + err.what() + "): reconnecting.");
-            wait_for_instrument();
-        }
-    }
-}
-
-void CircularSession::wait_for_instrument() {
-    for (int i = 0;; ++i) {
-        if (i >= options_.max_reconnect_attempts) end_interrupted("the instrument did not come back");
-        check_stop();
-        try {
-            if (source_.reconnect(options_.read_timeout)) return;
-        } catch (const SourceError& err) {
-            end_interrupted(std::string("the instrument came back unusable: ") + err.what());
-        }
-    }
-}
-
-void CircularSession::stream_on() {
-    if (streaming_) return;
-    for (int attempt = 1;; ++attempt) {
-        try {
-            source_.start();
-            break;
-        } catch (const SourceError& err) {
-            if (attempt >= kLinkRetries) end_interrupted(std::string("the instrument does not stream: ") + err.what());
-            op_.message(std::string("The instrument does not stream (") + err.what() + "): reconnecting.");
-            wait_for_instrument();
-            reference();
-        }
-    }
-    streaming_ = true;
-}
-
-void CircularSession::stream_off() {
-    if (!streaming_) return;
-    streaming_ = false;
-    try {
-        source_.stop();
-    } catch (const SourceError&) {
-        // a link that broke while stopping shows at the next start
-    }
-}
-
 double CircularSession::run_duration_s(std::size_t run) const {
     const circ::RunSpec& r = test_.runs[run];
     const double v = test_.feed_mm_min / 60.0;
@@ -157,7 +103,7 @@ bool CircularSession::attempt(int number) {
          << " mm/min, " << test_.runs.size() << " run" << (test_.runs.size() == 1 ? "" : "s")
          << "): load it and press cycle start now.";
     op_.run_part_program(what.str(), retry);
-    stream_on();
+    link_->stream_on();
     ++summary_.attempts;
 
     const double L = status_.calibrated_length_mm;
@@ -182,7 +128,7 @@ bool CircularSession::attempt(int number) {
         a.good = false;
         a.why = why;
         if (!seqs.empty()) a.first_seq = seqs.front(), a.last_seq = seqs.back();
-        stream_off();
+        link_->stream_off();
         sink_.on_attempt(a);
         fire(Event::ProgramEnded, "attempt " + std::to_string(number) + ": " + why);
         op_.message("This run of the program cannot be used: " + why + ".");
@@ -197,13 +143,13 @@ bool CircularSession::attempt(int number) {
         const ReadStatus st = source_.read(buf, n, options_.read_timeout);
         if (st == ReadStatus::Disconnected) {
             ++summary_.pauses;
-            streaming_ = false;
+            link_->lost();
             fire(Event::DeviceLost, "instrument lost during " + (run < test_.runs.size() ? run_name(run) : "the test"));
             op_.message(
                 "Instrument lost: plug it back in. The running program cannot finish the test: stop it (reset) "
                 "once the instrument is back; it is run again from its start.");
-            wait_for_instrument();
-            reference();
+            link_->wait_for_instrument();
+            link_->reference();
             fire(Event::DeviceBack, "re-referenced");
             a.good = false;
             a.why = "the instrument was lost during " + (run < test_.runs.size() ? run_name(run) : "the test");
@@ -351,7 +297,7 @@ bool CircularSession::attempt(int number) {
         fi.reset();
         ++run;
         if (run < test_.runs.size()) continue;
-        stream_off();
+        link_->stream_off();
         a.good = true;
         a.first_seq = seqs[trace_first];
         a.last_seq = seqs[last];
@@ -382,7 +328,7 @@ CircularSummary CircularSession::run() {
         if (status_.battery_pct < 5)
             end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
         sink_.on_instrument_accepted(status_);
-        if (!status_.referenced) reference();
+        if (!status_.referenced) link_->reference();
         fire(Event::CheckPassed,
              "bar " + fmt(status_.calibrated_length_mm, 3) + " mm, " + fmt(status_.sample_rate_hz, 0) + " readings/s");
         std::ostringstream setup;
@@ -430,7 +376,7 @@ CircularSummary CircularSession::run() {
             summary_.trace.clear();
         }
     } catch (const Stop&) {
-        stream_off();
+        link_->stream_off();
     }
     summary_.final_state = sm_.state();
     return summary_;

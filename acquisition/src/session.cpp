@@ -8,6 +8,7 @@
 
 #include "ballbar/acquisition/bar_check.hpp"
 #include "ballbar/acquisition/compute.hpp"
+#include "instrument_link.hpp"
 
 namespace ballbar::acquisition {
 
@@ -39,7 +40,13 @@ Session::Session(const Plan& plan, SampleSource& source, SessionSink& sink, Oper
       captured_(plan.points.size()),
       failures_(plan.points.size(), 0),
       best_failed_(plan.points.size()),
-      failure_why_(plan.points.size()) {}
+      failure_why_(plan.points.size()) {
+    link_ = std::make_unique<detail::InstrumentLink>(
+        source, op, detail::InstrumentLink::Settings{options.read_timeout, options.max_reconnect_attempts},
+        [this] { check_stop(); }, [this](const std::string& reason) { end_interrupted(reason); });
+}
+
+Session::~Session() = default;
 
 void Session::restore(std::span<const CapturedPoint> done) {
     for (const CapturedPoint& c : done) {
@@ -113,12 +120,7 @@ SessionSummary Session::run() {
         fire(Event::Accepted);
     } catch (const Stop&) {
     }
-    if (streaming_) {
-        try {
-            stream_off();
-        } catch (const SourceError&) {
-        }
-    }
+    link_->stream_off();
     summary_.final_state = sm_.state();
     return summary_;
 }
@@ -136,7 +138,7 @@ void Session::check_instrument() {
     if (!status_.bar_temp_C &&
         !op_.confirm("temperature", "The bar's temperature sensor failed. Measure without bar temperature?"))
         end(Event::Fail, "bar temperature sensor failed");
-    if (!status_.referenced) reference();
+    if (!status_.referenced) link_->reference();
     AttributionSettings as;
     as.point_count = plan_.points.size();
     as.sample_rate_hz = status_.sample_rate_hz;
@@ -157,34 +159,6 @@ void Session::check_instrument() {
     std::string detail = "battery " + fmt(status_.battery_pct, 0) + " %";
     if (status_.bar_temp_C) detail += ", bar " + fmt(*status_.bar_temp_C, 2) + " °C";
     fire(Event::CheckPassed, detail);
-}
-
-/// How often a start or a reference that failed is tried again after getting the link back.
-constexpr int kLinkRetries = 3;
-
-void Session::reference() {
-    for (;;) {
-        check_stop();
-        if (op_.confirm("reference", "Put the bar in its calibrator to set the reference (zero). Ready?")) break;
-        const std::size_t c = op_.choose({"reference-declined",
-                                          "The instrument must be referenced before it measures. Ask again, or stop "
-                                          "the session (resumable)?",
-                                          {"again", "stop"},
-                                          0});
-        if (c == 1) end_interrupted("reference not set");
-    }
-    for (int attempt = 1;; ++attempt) {
-        try {
-            source_.set_reference();
-            return;
-        } catch (const SourceError& err) {
-            // No answer: the link may have dropped right after it came back. Get it back and try again
-            // (the bar is still in its calibrator); give up like a lost instrument.
-            if (attempt >= kLinkRetries) end_interrupted(std::string("setting the reference failed: ") + err.what());
-            op_.message(std::string("Setting the reference failed (") + err.what() + "): reconnecting.");
-            wait_for_instrument();
-        }
-    }
 }
 
 void Session::set_up() {
@@ -286,56 +260,17 @@ bool Session::decide_failed_points() {
     return true;
 }
 
-void Session::wait_for_instrument() {
-    for (int i = 0;; ++i) {
-        if (i >= options_.max_reconnect_attempts) end_interrupted("the instrument did not come back");
-        check_stop();
-        bool back = false;
-        try {
-            back = source_.reconnect(options_.read_timeout);
-        } catch (const SourceError& err) {
-            end_interrupted(std::string("the instrument came back unusable: ") + err.what());
-        }
-        if (back) return;
-    }
-}
-
 void Session::stream_on() {
-    if (streaming_) return;
-    for (int attempt = 1;; ++attempt) {
-        try {
-            source_.start();
-            break;
-        } catch (const SourceError& err) {
-            // A link that broke again between its reconnect and this start (a cable still loose): get it
-            // back and re-reference before streaming, as after any loss; give up like a lost instrument.
-            if (attempt >= kLinkRetries) end_interrupted(std::string("the instrument does not stream: ") + err.what());
-            op_.message(std::string("The instrument does not stream (") + err.what() + "): reconnecting.");
-            wait_for_instrument();
-            reference();
-        }
-    }
-    streaming_ = true;
+    if (!link_->stream_on()) return;
     silent_reads_ = 0;
     stream_now_us_.reset();
-}
-
-void Session::stream_off() {
-    if (!streaming_) return;
-    streaming_ = false;
-    try {
-        source_.stop();
-    } catch (const SourceError&) {
-        // A link that broke while stopping shows at the next start.
-    }
-    // Samples still buffered in the driver were read before the stop; a new stream follows.
 }
 
 void Session::program_stops(const ProgramEntry& entry) {
     for (const ProgramStop& stop : entry.stops_before) {
         const std::string& what = stop.what;
-        if (!streaming_) stream_on();  // each stop follows a cycle start
-        stream_off();
+        if (!link_->streaming()) stream_on();  // each stop follows a cycle start
+        link_->stream_off();
         if (attributor_) {
             const AttributionEvent ev = attributor_->reset("program stop");
             if (ev.kind == AttributionEvent::Kind::Void) on_void(ev);
@@ -376,7 +311,7 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
         prog.nc.blocks.insert(prog.nc.blocks.begin() + 1, {c, m});
     }
     ++summary_.programs;
-    stream_off();
+    link_->stream_off();
     check_stop();
     if (sm_.state() == State::SetUp)
         fire(Event::SetUpConfirmed, std::string(to_string(plan_.machine.geometry.type)) + ", " +
@@ -417,7 +352,7 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
         if (cs.manual && manual_at != cursor_) {
             manual_at = cursor_;
             // Manual capture: the operator says when the machine stands at the point.
-            stream_off();
+            link_->stream_off();
             const PlannedPoint& pp = plan_.points[prog.entries[cursor_].point];
             check_stop();
             op_.wait_at_point(pp);
@@ -567,16 +502,16 @@ bool Session::fetch() {
     const ReadStatus st = source_.read(buffer_, n, options_.read_timeout);
     if (st == ReadStatus::Disconnected) {
         ++summary_.pauses;
-        streaming_ = false;
+        link_->lost();
         const AttributionEvent ev = attributor_->reset("the instrument was lost");
         if (ev.kind == AttributionEvent::Kind::Void) on_void(ev);
         fire(Event::DeviceLost, "instrument lost; " + std::to_string(missing().size()) + " points missing");
         op_.message(
             "Instrument lost: plug it back in. The running program cannot finish the measurement: "
             "stop it (reset) once the instrument is back; the points it misses go to a retry program.");
-        wait_for_instrument();
+        link_->wait_for_instrument();
         op_.message("Instrument back. Stop the NC program now (reset): the bar is re-referenced first.");
-        reference();
+        link_->reference();
         fire(Event::DeviceBack, "re-referenced");
         return false;
     }

@@ -16,6 +16,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -26,6 +27,10 @@
 #include "ballbar/analysis/circular.hpp"
 
 namespace ballbar::acquisition {
+
+namespace detail {
+class InstrumentLink;
+}
 
 /// One run as found in the data.
 struct CircularRun {
@@ -107,6 +112,9 @@ class CircularSession {
   public:
     CircularSession(analysis::circular::TestSpec test, SampleSource& source, CircularSink& sink, Operator& op,
                     CircularOptions options = {});
+    ~CircularSession();
+    CircularSession(const CircularSession&) = delete;
+    CircularSession& operator=(const CircularSession&) = delete;
     CircularSummary run();
     State state() const { return sm_.state(); }
 
@@ -116,10 +124,6 @@ class CircularSession {
     [[noreturn]] void end(Event e, const std::string& reason);
     [[noreturn]] void end_interrupted(const std::string& reason);
     void check_stop();
-    void reference();
-    void wait_for_instrument();
-    void stream_on();
-    void stream_off();
     /// One run of the program; true when every run was captured.
     bool attempt(int number);
     double run_duration_s(std::size_t run) const;
@@ -130,8 +134,8 @@ class CircularSession {
     Operator& op_;
     CircularOptions options_;
     StateMachine sm_;
+    std::unique_ptr<detail::InstrumentLink> link_;  ///< reference, stream, reconnects (instrument_link.hpp)
     InstrumentStatus status_;
-    bool streaming_ = false;
     std::optional<std::uint64_t> last_seq_;
     CircularSummary summary_;
 };

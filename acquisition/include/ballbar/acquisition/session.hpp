@@ -13,6 +13,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -24,6 +25,10 @@
 #include "ballbar/acquisition/state_machine.hpp"
 
 namespace ballbar::acquisition {
+
+namespace detail {
+class InstrumentLink;
+}
 
 struct SessionOptions {
     std::chrono::milliseconds read_timeout{200};
@@ -72,6 +77,9 @@ struct SessionSummary {
 class Session {
   public:
     Session(const Plan& plan, SampleSource& source, SessionSink& sink, Operator& op, SessionOptions options = {});
+    ~Session();
+    Session(const Session&) = delete;
+    Session& operator=(const Session&) = delete;
 
     /// Points of an interrupted session (any order, each at its planned place).
     void restore(std::span<const CapturedPoint> done);
@@ -98,12 +106,7 @@ class Session {
     void on_captured(const AttributionEvent& ev, std::size_t entry);
     void on_void(const AttributionEvent& ev);
     bool fetch();  // false: the instrument was lost (and is back, re-referenced)
-    void reference();
-    /// Reconnects until the instrument is back (identified, not streaming); ends the session interrupted
-    /// after options_.max_reconnect_attempts.
-    void wait_for_instrument();
     void stream_on();
-    void stream_off();
     void compute_all();
     bool review();
     void report_progress();
@@ -116,6 +119,7 @@ class Session {
     Operator& op_;
     SessionOptions options_;
     StateMachine sm_;
+    std::unique_ptr<detail::InstrumentLink> link_;  ///< reference, stream, reconnects (instrument_link.hpp)
     InstrumentStatus status_;
     std::vector<std::optional<CapturedPoint>> captured_;  ///< by plan index
     std::vector<int> failures_;                           ///< failed checks per point since last decision
@@ -129,7 +133,6 @@ class Session {
     std::optional<std::uint64_t> last_seq_;
     std::optional<std::uint64_t> first_time_us_;
     std::optional<std::uint64_t> stream_now_us_;
-    bool streaming_ = false;
     int silent_reads_ = 0;
     // The program being run (for progress).
     const MeasuringProgram* program_ = nullptr;
