@@ -6,19 +6,15 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <fstream>
 #include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <thread>
 
 #include "acquisition_adapters.hpp"
 #include "ballbar/acquisition/circle_program.hpp"
@@ -32,6 +28,7 @@
 #include "gauge_source.hpp"
 #include "interrupt.hpp"
 #include "operators.hpp"
+#include "pty_emulator.hpp"
 #include "storage_errors.hpp"
 
 namespace ballbar::app {
@@ -492,54 +489,6 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
 
 // ---- demo --test circular ------------------------------------------------------------------------------
 
-/// The emulator on a pty, served by a thread of this process on simulated time (as `demo` does).
-class PtyServedEmulator {
-  public:
-    explicit PtyServedEmulator(device::EmulatorConfig config) : emu_(std::move(config)) {
-        device::HostOptions ho;
-        ho.pacing = device::Pacing::Simulated;
-        ho.stop = &stop_;
-        host_ = std::make_unique<device::EmulatorHost>(emu_, ho);
-        thread_ = std::thread([this] {
-            try {
-                host_->run_pty([this](const std::string& path) {
-                    std::lock_guard lock(mutex_);
-                    path_ = path;
-                    cv_.notify_all();
-                });
-            } catch (const std::exception& e) {
-                std::lock_guard lock(mutex_);
-                error_ = e.what();
-                cv_.notify_all();
-            }
-        });
-    }
-    ~PtyServedEmulator() { halt(); }
-    PtyServedEmulator(const PtyServedEmulator&) = delete;
-    PtyServedEmulator& operator=(const PtyServedEmulator&) = delete;
-    void halt() {
-        stop_ = true;
-        if (thread_.joinable()) thread_.join();
-    }
-    std::string path() {
-        std::unique_lock lock(mutex_);
-        if (!cv_.wait_for(lock, std::chrono::seconds(10), [this] { return !path_.empty() || !error_.empty(); }))
-            throw CliError(kExitFailure, "the emulator did not open a pseudo-terminal");
-        if (!error_.empty()) throw CliError(kExitFailure, "emulator: " + error_);
-        return path_;
-    }
-    device::Emulator& emulator() { return emu_; }
-
-  private:
-    device::Emulator emu_;
-    std::atomic<bool> stop_{false};
-    std::unique_ptr<device::EmulatorHost> host_;
-    std::thread thread_;
-    std::mutex mutex_;
-    std::condition_variable cv_;
-    std::string path_, error_;
-};
-
 /// The demo's machine: every effect of trace.md at once, each at a few µm of radial amplitude.
 device::ContinuousErrors demo_errors() {
     device::ContinuousErrors e;
@@ -603,7 +552,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
             throw CliError(kExitUsage, std::string("--faults: ") + e.what());
         }
     }
-    PtyServedEmulator emulator(cfg);
+    PtyEmulator emulator(cfg);
 
     storage::StoreOptions so;
     so.sync_full = false;

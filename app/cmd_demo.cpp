@@ -7,17 +7,13 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <iostream>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <thread>
 
 #include "acquisition_adapters.hpp"
 #include "ballbar/acquisition/compute.hpp"
@@ -30,6 +26,7 @@
 #include "figures.hpp"
 #include "files.hpp"
 #include "gauge_source.hpp"  // demo --instrument: a digital gauge (issue 14)
+#include "pty_emulator.hpp"
 #if __has_include("ballbar/report/build.hpp")
 #include "ballbar/report/build.hpp"
 #define BALLBAR_HAVE_REPORT 1
@@ -176,54 +173,6 @@ device::FaultConfig parse_faults(const std::string& spec) {
         throw CliError(kExitUsage, std::string("--faults: ") + e.what());
     }
 }
-
-/// The emulator on a pty, served by a thread until destroyed.
-class PtyEmulator {
-  public:
-    explicit PtyEmulator(device::EmulatorConfig config) : emu_(std::move(config)) {
-        device::HostOptions ho;
-        ho.pacing = device::Pacing::Simulated;
-        ho.stop = &stop_;
-        host_ = std::make_unique<device::EmulatorHost>(emu_, ho);
-        thread_ = std::thread([this] {
-            try {
-                host_->run_pty([this](const std::string& path) {
-                    std::lock_guard lock(mutex_);
-                    path_ = path;
-                    cv_.notify_all();
-                });
-            } catch (const std::exception& e) {
-                std::lock_guard lock(mutex_);
-                error_ = e.what();
-                cv_.notify_all();
-            }
-        });
-    }
-    ~PtyEmulator() { halt(); }
-    /// Stops serving (the emulator's state can then be read without racing its thread).
-    void halt() {
-        stop_ = true;
-        if (thread_.joinable()) thread_.join();
-    }
-    /// The current pty (a new one after a simulated disconnect).
-    std::string path() {
-        std::unique_lock lock(mutex_);
-        if (!cv_.wait_for(lock, std::chrono::seconds(10), [this] { return !path_.empty() || !error_.empty(); }))
-            throw CliError(kExitFailure, "the emulator did not open a pseudo-terminal");
-        if (!error_.empty()) throw CliError(kExitFailure, "emulator: " + error_);
-        return path_;
-    }
-    device::Emulator& emulator() { return emu_; }
-
-  private:
-    device::Emulator emu_;
-    std::atomic<bool> stop_{false};
-    std::unique_ptr<device::EmulatorHost> host_;
-    std::thread thread_;
-    std::mutex mutex_;
-    std::condition_variable cv_;
-    std::string path_, error_;
-};
 
 json angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType type, acq::TestKind kind) {
     if (!e) return nullptr;
