@@ -19,6 +19,7 @@
 #include "ballbar/storage/trace_file.hpp"
 #include "circle_measure.hpp"
 #include "circle_output.hpp"
+#include "circle_test_options.hpp"
 #include "command.hpp"
 #include "files.hpp"
 #include "storage_errors.hpp"
@@ -29,15 +30,7 @@ namespace {
 namespace circ = analysis::circular;
 
 struct PlanOptions {
-    std::string plane = "XY";
-    double radius_mm = 100.0;
-    std::vector<double> centre_mm{0.0, 0.0, 0.0};
-    double feed_mm_min = 1000.0;
-    double feed_in_mm = 1.5;
-    std::optional<double> overshoot_deg;  // default: 45 for a full circle, 20 for a partial arc
-    double arc_deg = 360.0;
-    std::optional<double> start_deg;  // default: 0 (full) or −overshoot (partial)
-    std::string directions = "both";
+    CircleTestOptions test;
     std::string dialect;
     std::string machine_file;
     std::string out = "-";
@@ -46,28 +39,6 @@ struct PlanOptions {
     std::optional<double> rate_hz;
     bool store = false;
 };
-
-circ::TestSpec plan_test(const PlanOptions& o) {
-    circ::TestSpec t;
-    const auto plane = circ::parse_plane(o.plane);
-    if (!plane) throw CliError(kExitUsage, "--plane must be XY, YZ or ZX");
-    t.plane = *plane;
-    t.radius_mm = o.radius_mm;
-    if (o.centre_mm.size() != 3) throw CliError(kExitUsage, "--centre needs three numbers X Y Z");
-    t.centre_mm = {o.centre_mm[0], o.centre_mm[1], o.centre_mm[2]};
-    t.feed_mm_min = o.feed_mm_min;
-    t.feed_in_mm = o.feed_in_mm;
-    const bool full = o.arc_deg >= 360.0;
-    const double over = o.overshoot_deg ? *o.overshoot_deg : full ? 45.0 : 20.0;  // (checked by validate())
-    const double start = o.start_deg ? *o.start_deg : full ? 0.0 : -over;
-    const double end = start + 2.0 * over + o.arc_deg;
-    if (o.directions == "both" || o.directions == "ccw")
-        t.runs.push_back({circ::Direction::Ccw, start, over, o.arc_deg});
-    if (o.directions == "both") t.runs.push_back({circ::Direction::Cw, end, over, o.arc_deg});
-    if (o.directions == "cw") t.runs.push_back({circ::Direction::Cw, start, over, o.arc_deg});
-    if (const auto bad = t.validate(); !bad.empty()) throw CliError(kExitUsage, bad);
-    return t;
-}
 
 /// Numbers in messages as the part program writes them (4 decimals, trailing zeros dropped).
 std::string num(double v) {
@@ -126,7 +97,7 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
 }
 
 int run_plan(const PlanOptions& o, const Globals& globals) {
-    const circ::TestSpec t = plan_test(o);
+    const circ::TestSpec t = circle_test(o.test);
     check_feed_for_rate(t, o.rate_hz);
     std::optional<acquisition::MachineFile> machine;
     if (!o.machine_file.empty()) {
@@ -287,18 +258,19 @@ BALLBAR_COMMAND(circle) {
 
     auto po = std::make_shared<PlanOptions>();
     auto* plan = circle->add_subcommand("plan", "Write the part program of a circular test");
-    plan->add_option("--plane", po->plane, "XY, YZ or ZX")->capture_default_str();
-    plan->add_option("--radius", po->radius_mm, "programmed radius = bar length, mm")->capture_default_str();
-    plan->add_option("--centre", po->centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
-    plan->add_option("--feed", po->feed_mm_min, "feed of every move, mm/min")->capture_default_str();
+    plan->add_option("--plane", po->test.plane, "XY, YZ or ZX")->capture_default_str();
+    plan->add_option("--radius", po->test.radius_mm, "programmed radius = bar length, mm")->capture_default_str();
+    plan->add_option("--centre", po->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
+    plan->add_option("--feed", po->test.feed_mm_min, "feed of every move, mm/min")->capture_default_str();
     plan->add_option("--rate", po->rate_hz,
                      "the instrument's reading rate, readings/s: refuse a feed too fast for it (gauges: 10-50)");
-    plan->add_option("--feed-in", po->feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
-    plan->add_option("--arc", po->arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
+    plan->add_option("--feed-in", po->test.feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
+    plan->add_option("--arc", po->test.arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
         ->capture_default_str();
-    plan->add_option("--overshoot", po->overshoot_deg, "overshoot each side, degrees (default 45 full, 20 partial)");
-    plan->add_option("--start", po->start_deg, "start angle of the first run, degrees (default 0 / −overshoot)");
-    plan->add_option("--directions", po->directions, "both, ccw or cw")
+    plan->add_option("--overshoot", po->test.overshoot_deg,
+                     "overshoot each side, degrees (default 45 full, 20 partial)");
+    plan->add_option("--start", po->test.start_deg, "start angle of the first run, degrees (default 0 / −overshoot)");
+    plan->add_option("--directions", po->test.directions, "both, ccw or cw")
         ->check(CLI::IsMember({"both", "ccw", "cw"}))
         ->capture_default_str();
     plan->add_option("--dialect", po->dialect, "fanuc or linuxcnc (default: the machine file's, else fanuc)");

@@ -25,6 +25,7 @@
 #include "ballbar/storage/trace_file.hpp"
 #include "circle_measure.hpp"
 #include "circle_output.hpp"
+#include "circle_test_options.hpp"
 #include "gauge_source.hpp"
 #include "interrupt.hpp"
 #include "operators.hpp"
@@ -328,12 +329,7 @@ void outcome(const acq::CircularSummary& sum, std::optional<std::int64_t> id, co
 struct MeasureOptions {
     std::string device;
     std::string test_file;
-    std::string plane = "XY";
-    double radius_mm = 100;
-    std::vector<double> centre_mm{0, 0, 0};
-    double feed_mm_min = 1000;
-    double feed_in_mm = 1.5;
-    double arc_deg = 360;
+    CircleTestOptions test;  ///< without --test
     std::string dialect = "fanuc";
     double dwell_s = 1.0;
     std::string program_file;
@@ -353,21 +349,7 @@ circ::TestSpec test_from_options(const MeasureOptions& o) {
             throw CliError(kExitUsage, o.test_file + ": " + e.what());
         }
     }
-    circ::TestSpec t;
-    const auto plane = circ::parse_plane(o.plane);
-    if (!plane) throw CliError(kExitUsage, "--plane must be XY, YZ or ZX");
-    t.plane = *plane;
-    t.radius_mm = o.radius_mm;
-    if (o.centre_mm.size() != 3) throw CliError(kExitUsage, "--centre needs three numbers X Y Z");
-    t.centre_mm = {o.centre_mm[0], o.centre_mm[1], o.centre_mm[2]};
-    t.feed_mm_min = o.feed_mm_min;
-    t.feed_in_mm = o.feed_in_mm;
-    const bool full = o.arc_deg >= 360.0;
-    const double over = full ? 45.0 : 20.0, start = full ? 0.0 : -over;
-    t.runs = {{circ::Direction::Ccw, start, over, o.arc_deg},
-              {circ::Direction::Cw, start + 2 * over + o.arc_deg, over, o.arc_deg}};
-    if (const auto bad = t.validate(); !bad.empty()) throw CliError(kExitUsage, bad);
-    return t;
+    return circle_test(o.test);
 }
 
 int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
@@ -519,11 +501,11 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     if (!plane) throw CliError(kExitUsage, "--plane must be XY, YZ or ZX");
     const double arc = o.arc_deg > 0 ? o.arc_deg : (*plane == circ::Plane::XY ? 360.0 : 180.0);
     MeasureOptions mo;
-    mo.plane = o.plane;
-    mo.radius_mm = o.radius_mm;
-    mo.feed_mm_min = o.feed_mm_min;
-    mo.feed_in_mm = 0.8;  // the bar's ±1 mm range holds the stand at R + feed-in
-    mo.arc_deg = arc;
+    mo.test.plane = o.plane;
+    mo.test.radius_mm = o.radius_mm;
+    mo.test.feed_mm_min = o.feed_mm_min;
+    mo.test.feed_in_mm = 0.8;  // the bar's ±1 mm range holds the stand at R + feed-in
+    mo.test.arc_deg = arc;
     const circ::TestSpec test = test_from_options(mo);
     const auto dialect = analysis::NcDialect::Fanuc;
     const double dwell_s = 1.0;
@@ -649,12 +631,12 @@ void add_circle_measure(CLI::App& circle, Globals& globals) {
     auto* m = circle.add_subcommand("measure", "Measure a circular test on an instrument (guided)");
     m->add_option("--device", o->device, "Instrument URI (serial:PATH, tcp:HOST:PORT, usb:…, sylvac:PATH, …)");
     m->add_option("--test", o->test_file, "the test header (JSON) of `circle plan --test-out`");
-    m->add_option("--plane", o->plane, "XY, YZ or ZX (without --test)")->capture_default_str();
-    m->add_option("--radius", o->radius_mm, "programmed radius = bar length, mm")->capture_default_str();
-    m->add_option("--centre", o->centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
-    m->add_option("--feed", o->feed_mm_min, "feed, mm/min")->capture_default_str();
-    m->add_option("--feed-in", o->feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
-    m->add_option("--arc", o->arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
+    m->add_option("--plane", o->test.plane, "XY, YZ or ZX (without --test)")->capture_default_str();
+    m->add_option("--radius", o->test.radius_mm, "programmed radius = bar length, mm")->capture_default_str();
+    m->add_option("--centre", o->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
+    m->add_option("--feed", o->test.feed_mm_min, "feed, mm/min")->capture_default_str();
+    m->add_option("--feed-in", o->test.feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
+    m->add_option("--arc", o->test.arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
         ->capture_default_str();
     m->add_option("--dialect", o->dialect, "part program dialect: fanuc or linuxcnc")->capture_default_str();
     m->add_option("--dwell", o->dwell_s, "stand before each feed-in, s")->capture_default_str();

@@ -1,0 +1,30 @@
+// SPDX-License-Identifier: MIT
+// The circular test as the command line gives it (`circle plan`, `circle measure`): plane, radius,
+// centre, feed, feed-in, arc and runs, turned into the test header the part program, the session and
+// the analysis share (docs/circular.md, "Planning").
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ballbar/analysis/circular.hpp"
+
+namespace ballbar::app {
+
+struct CircleTestOptions {
+    std::string plane = "XY";
+    double radius_mm = 100.0;
+    std::vector<double> centre_mm{0.0, 0.0, 0.0};
+    double feed_mm_min = 1000.0;
+    double feed_in_mm = 1.5;
+    double arc_deg = 360.0;
+    std::optional<double> overshoot_deg;  ///< default: 45 for a full circle, 20 for a partial arc
+    std::optional<double> start_deg;      ///< default: 0 (full) or −overshoot (partial)
+    std::string directions = "both";      ///< both (ccw, then cw from where it ended), ccw or cw
+};
+
+/// The test these options describe; CliError (usage) naming the option when it is not a test.
+analysis::circular::TestSpec circle_test(const CircleTestOptions& o);
+
+}  // namespace ballbar::app
