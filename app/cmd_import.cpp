@@ -25,28 +25,12 @@ struct ImportOptions {
     bool allow_duplicate = false;
 };
 
-/// The file's SHA-256 and size, streamed in 1 MiB pieces (memory independent of the file's length).
+/// The SHA-256 and size of what was read of the file: the bytes the parser read, hashed as it read
+/// them (one read of the file: what is hashed is what was imported).
 struct Content {
     std::string sha256;
     std::int64_t bytes = 0;
 };
-
-Content hash_file(const std::string& path) {
-    try {
-        fileio::InputFile in = fileio::InputFile::open(path, "file to import");
-        storage::Sha256 h;
-        std::string buf(1 << 20, '\0');
-        Content c;
-        while (const std::size_t n = in.read(buf.data(), buf.size())) {
-            h.update(std::string_view(buf.data(), n));
-            c.bytes += static_cast<std::int64_t>(n);
-        }
-        c.sha256 = h.hex();
-        return c;
-    } catch (const fileio::FileError& e) {
-        throw cli_error(e);
-    }
-}
 
 /// Refuses content imported before (exit 2, naming the session), or with --allow-duplicate warns and
 /// returns the sessions it duplicates. Runs in the import's transaction, so two imports of one file at
@@ -93,9 +77,14 @@ int run_import_trace(const ImportOptions& o, const Globals& globals);
 /// file's length); an invalid line anywhere stores nothing.
 int run_import(const ImportOptions& o, const Globals& globals) {
     if (storage::looks_like_trace(fileio::read_head(o.file, "file to import", 64))) return run_import_trace(o, globals);
+    storage::Sha256 hash;
+    Content c;
     std::optional<storage::ReadingsStream> stream;
     try {
-        stream.emplace(storage::ReadingsStream::open(o.file));
+        stream.emplace(storage::ReadingsStream::open(o.file, [&hash, &c](std::string_view bytes) {
+            hash.update(bytes);
+            c.bytes += static_cast<std::int64_t>(bytes.size());
+        }));
     } catch (const storage::ReadingsFileError& e) {
         throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
     }
@@ -108,9 +97,9 @@ int run_import(const ImportOptions& o, const Globals& globals) {
         } catch (const storage::ReadingsFileError& e) {
             throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
         }
-        // Hashed once the file has proved a readings file (a 10 GB file of zeros is refused at its first
-        // line, not read through); a duplicate rolls the import back.
-        const Content c = hash_file(o.file);
+        // The whole file has been read (and hashed) now that it proved a readings file; a duplicate rolls
+        // the import back.
+        c.sha256 = hash.hex();
         const auto duplicates = check_duplicate(store, c, o);
         storage::record_import(store, r.session, c.sha256, o.file, c.bytes);
         tx.commit();
@@ -140,13 +129,19 @@ int run_import(const ImportOptions& o, const Globals& globals) {
 /// A ballbar-trace/1 file: a circular session (procedure "circular") with every sample.
 int run_import_trace(const ImportOptions& o, const Globals& globals) {
     storage::TraceFile trace;
+    Content c;
     try {
-        trace = storage::read_trace_file(o.file);
+        // Read once (at most the trace reader's cap): parsed and hashed from the same bytes.
+        const std::string text = fileio::read_text(o.file, "trace file");
+        trace = storage::parse_trace(text);
+        c.sha256 = storage::sha256_hex(text);
+        c.bytes = static_cast<std::int64_t>(text.size());
+    } catch (const fileio::FileError& e) {
+        throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
     } catch (const storage::TraceFileError& e) {
         throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
     }
     for (const auto& w : trace.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
-    const Content c = hash_file(o.file);  // a valid trace, so at most the trace reader's cap
     try {
         storage::Store store(resolve_db_path(globals));
         storage::Transaction tx(store.db());

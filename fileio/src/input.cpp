@@ -180,6 +180,7 @@ bool LineReader::fill() {
         eof_ = true;
         return false;
     }
+    if (tap_) tap_(std::string_view(buf_.data() + end_, got));
     end_ += got;
     return true;
 }

@@ -522,9 +522,10 @@ ReadingsStream::ReadingsStream(Fetch fetch) : impl_(std::make_unique<Impl>(std::
     }
 }
 
-ReadingsStream ReadingsStream::open(const std::filesystem::path& path) {
+ReadingsStream ReadingsStream::open(const std::filesystem::path& path, std::function<void(std::string_view)> tap) {
     try {
         fileio::LineReader lines(fileio::InputFile::open(path.string(), "readings file"));
+        lines.set_tap(std::move(tap));
         auto owned = std::make_shared<fileio::LineReader>(std::move(lines));
         return ReadingsStream([owned] { return owned->next(); });
     } catch (const fileio::FileError& e) {

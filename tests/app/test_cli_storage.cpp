@@ -141,6 +141,20 @@ TEST(CliStorage, ImportingTheSameContentAgainIsRefusedNamingTheSession) {
     EXPECT_NE(shown.out.find("SHA-256 " + j.value("sha256", "")), std::string::npos) << shown.out;
 }
 
+// A trace is read once, parsed and hashed from the same bytes: the stored hash is sha256sum's, and the
+// same trace again is refused.
+TEST(CliStorage, ATraceIsHashedAsItWasReadAndImportedOnce) {
+    TempDir d;
+    const std::string trace = std::string(BALLBAR_TEST_DATA_DIR) + "/traces/spec_example.csv";
+    const CliRun first = run(d, "import '" + trace + "' --json");
+    ASSERT_EQ(first.code, 0) << first.err;
+    ASSERT_EQ(std::system(("sha256sum '" + trace + "' > '" + d.file("sum") + "'").c_str()), 0);
+    EXPECT_EQ(json::parse(first.out).value("sha256", ""), slurp(d.path / "sum").substr(0, 64));
+    const CliRun again = run(d, "import '" + trace + "'");
+    EXPECT_EQ(again.code, 2) << again.err;
+    EXPECT_NE(again.err.find("already imported as session 1"), std::string::npos) << again.err;
+}
+
 TEST(CliStorage, NominalDisagreementIsReported) {
     TempDir d;
     const CliRun r = run(d, "import '" + kData + "rtttr_nominal_mismatch.csv'");

@@ -98,6 +98,22 @@ TEST(FileioInput, LinesAcrossEveryBufferBoundary) {
     EXPECT_EQ(lines_of(d.write("big", text)), expected);
 }
 
+// The tap (import's hash) sees the file's bytes exactly: each once, in order, line ends included,
+// across the reader's buffer boundaries and with no final newline.
+TEST(FileioInput, TheTapSeesEveryByteOnceInOrder) {
+    Dir d;
+    std::string text;
+    for (std::size_t n : {0u, 65535u, 1u, 65536u, 200000u, 2u}) text += std::string(n, 'x') + (n % 2 ? "\r\n" : "\n");
+    text += "last line without a newline";
+    LineReader r(InputFile::open(d.write("t", text), "test file"));
+    std::string seen;
+    r.set_tap([&seen](std::string_view bytes) { seen += bytes; });
+    std::size_t lines = 0;
+    while (r.next()) ++lines;
+    EXPECT_EQ(lines, 7u);
+    EXPECT_EQ(seen, text);
+}
+
 TEST(FileioInput, ALineLongerThanTheLimitIsRefusedWithItsNumber) {
     Dir d;
     const std::string path = d.write("long", "ok\nok\n" + std::string(1001, 'z') + "\nok\n");

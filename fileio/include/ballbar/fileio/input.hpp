@@ -12,10 +12,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace ballbar::fileio {
 
@@ -99,10 +101,14 @@ class LineReader {
     /// Number of the line next() returned last (1-based).
     std::uint64_t line_number() const { return line_; }
     const InputFile& file() const { return file_; }
+    /// Called with every piece the file gives, in order: each byte once (a hash of what was read, taken
+    /// as it is read, so that what is hashed is what was parsed).
+    void set_tap(std::function<void(std::string_view)> tap) { tap_ = std::move(tap); }
 
   private:
     bool fill();
     InputFile file_;
+    std::function<void(std::string_view)> tap_;
     std::size_t max_line_;
     std::string buf_;
     std::size_t begin_ = 0, end_ = 0;

@@ -71,8 +71,10 @@ class ReadingsStream {
     /// The next line (LF and CR removed) or nothing at the end; valid until the next call.
     using Fetch = std::function<std::optional<std::string_view>()>;
     explicit ReadingsStream(Fetch fetch);
-    /// Streams the file at `path` (a regular file: fileio::InputFile).
-    static ReadingsStream open(const std::filesystem::path& path);
+    /// Streams the file at `path` (a regular file: fileio::InputFile). `tap`, when given, sees every
+    /// byte read, once and in order (import hashes the file with it: one read, so the hash is of what
+    /// was parsed).
+    static ReadingsStream open(const std::filesystem::path& path, std::function<void(std::string_view)> tap = nullptr);
     ReadingsStream(ReadingsStream&&) noexcept;
     ReadingsStream& operator=(ReadingsStream&&) noexcept;
     ~ReadingsStream();
