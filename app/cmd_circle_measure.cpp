@@ -71,6 +71,11 @@ class CircleStoreSink : public acq::CircularSink {
     }
 
     void on_instrument_accepted(const acq::InstrumentStatus&) override { ensure(); }
+    /// Called when the session fits the test to the instrument (before on_instrument_accepted).
+    std::function<void(const circ::TestSpec&)> test_fitted;
+    void on_test_fitted(const circ::TestSpec& t) override {
+        if (test_fitted) test_fitted(t);
+    }
     void on_transition(const acq::TransitionRecord& t) override {
         const storage::ProcedureStep step{std::string(acq::to_string(t.from)), std::string(acq::to_string(t.to)),
                                           std::string(acq::to_string(t.event)), t.detail, store_.now_iso8601()};
@@ -258,6 +263,7 @@ class CircleOperator : public acq::Operator {
         line_ = true;
     }
     void set_program_path(std::string path) { path_ = std::move(path); }
+    void set_program(std::string text) { program_ = std::move(text); }
     void run_part_program(std::string_view what, bool retry) override {
         end_line();
         if (!path_.empty()) {
@@ -333,6 +339,7 @@ struct MeasureOptions {
     std::string dialect = "fanuc";
     double dwell_s = 1.0;
     std::string program_file;
+    bool feed_in_given = false;  ///< --feed-in on the command line (else fitted to the bar's range)
     std::string resume;
     std::string operator_name;
     bool non_interactive = false;
@@ -442,6 +449,13 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     options.stop = InterruptGuard::flag();
     options.dwell_s = dwell_s;
     options.first_attempt = first_attempt;
+    // A test the operator did not shape (no --test, no --feed-in, not resumed) takes the feed-in the
+    // bar's range holds; the program and the stored header follow it.
+    options.fit_feed_in = !resumed && o.test_file.empty() && !o.feed_in_given;
+    sink.test_fitted = [&](const circ::TestSpec& fitted) {
+        test = fitted;
+        op.set_program(acq::circular_program(test, nc_dialect, dwell_s));
+    };
     const std::uint64_t first_seq = resumed ? store.next_seq(*resumed) : 0;
     acq::CircularSession session(test, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
     const acq::CircularSummary sum = session.run();
@@ -635,7 +649,9 @@ void add_circle_measure(CLI::App& circle, Globals& globals) {
     m->add_option("--radius", o->test.radius_mm, "programmed radius = bar length, mm")->capture_default_str();
     m->add_option("--centre", o->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
     m->add_option("--feed", o->test.feed_mm_min, "feed, mm/min")->capture_default_str();
-    m->add_option("--feed-in", o->test.feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
+    auto* feed_in = m->add_option("--feed-in", o->test.feed_in_mm,
+                                  "radial feed-in and feed-out, mm (default: 1.5, or less to keep the stand within "
+                                  "the bar's range)");
     m->add_option("--arc", o->test.arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
         ->capture_default_str();
     m->add_option("--dialect", o->dialect, "part program dialect: fanuc or linuxcnc")->capture_default_str();
@@ -645,7 +661,10 @@ void add_circle_measure(CLI::App& circle, Globals& globals) {
     m->add_option("--operator", o->operator_name, "operator name stored with the session");
     m->add_flag("--non-interactive", o->non_interactive, "answer every question yes (logged)");
     m->add_flag("--json", o->json, "events as JSON lines on stdout (answers from stdin unless --non-interactive)");
-    m->callback([o, &globals] { globals.action = [o, &globals] { return run_circle_measure(*o, globals); }; });
+    m->callback([o, feed_in, &globals] {
+        o->feed_in_given = feed_in->count() > 0;
+        globals.action = [o, &globals] { return run_circle_measure(*o, globals); };
+    });
 }
 
 }  // namespace ballbar::app

@@ -35,7 +35,7 @@ std::string circular_instrument_mismatch(const circ::TestSpec& test, const Instr
         return "the bar is calibrated at " + fmt(L, 3) + " mm but the test's radius is " + fmt(R, 3) +
                " mm: plan the test with --radius " + fmt(L, 3) +
                " (the bar's length) or fit the extension that makes " + fmt(R, 3) + " mm";
-    if (status.range_mm && R + test.feed_in_mm - L > 0.95 * range)
+    if (status.range_mm && R + test.feed_in_mm - L > 0.95 * range + 1e-6)  // (1 nm: rounding, not range)
         return "the feed-in of " + fmt(test.feed_in_mm, 3) + " mm leaves the bar's ±" + fmt(range, 3) +
                " mm range (the machine stands at " + fmt(R + test.feed_in_mm - L, 3) +
                " mm from the calibrated length before it): plan the test with --feed-in " +
@@ -84,6 +84,20 @@ void CircularSession::end_interrupted(const std::string& reason) {
 
 void CircularSession::check_stop() {
     if (options_.stop && options_.stop->load()) end_interrupted("interrupted by the operator");
+}
+
+void CircularSession::fit_feed_in() {
+    const double range = *status_.range_mm;
+    // The machine stands at radius + feed-in, the bar reads that less its calibrated length: as in
+    // circular_instrument_mismatch, at most 95 % of the range.
+    const double room = 0.95 * range - (test_.radius_mm - status_.calibrated_length_mm);
+    const double fitted = std::floor(room * 20.0 + 1e-9) / 20.0;
+    if (!(test_.feed_in_mm > fitted) || fitted < kMinFittedFeedIn_mm) return;  // fits, or the check refuses
+    op_.message("Feed-in " + fmt(fitted, 2) + " mm instead of " + fmt(test_.feed_in_mm, 2) +
+                " mm: the stand before each run stays within the bar's ±" + fmt(range, 3) +
+                " mm range (--feed-in sets it).");
+    test_.feed_in_mm = fitted;
+    sink_.on_test_fitted(test_);
 }
 
 double CircularSession::run_duration_s(std::size_t run) const {
@@ -317,6 +331,7 @@ CircularSummary CircularSession::run() {
             end(Event::Fail, std::string("cannot open the instrument: ") + e.what());
         }
         fire(Event::Connected, status_.description);
+        if (options_.fit_feed_in && status_.range_mm) fit_feed_in();
         if (const std::string bad = test_.validate(); !bad.empty()) {
             summary_.refused = true;
             end(Event::Fail, "the test: " + bad);

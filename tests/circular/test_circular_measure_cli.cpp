@@ -12,6 +12,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -208,6 +209,31 @@ TEST(CircleMeasure, TwoProcessesEmulatePtyAndMeasureStoreAnAnalysableSession) {
     const std::string id = std::to_string(done["session"].get<int>());
     const auto an = run(dir, "circle analyze " + id + " --json");
     EXPECT_EQ(an.code, 0) << an.err;
+}
+
+// The defaults on a ±1 mm bar: the 1.5 mm feed-in would stand the bar outside its range. Not asked for,
+// it is fitted (0.95 mm), said, written into the program and stored; asked for, it is refused.
+TEST(CircleMeasure, TheDefaultFeedInIsFittedToTheBarsRangeAndAChosenOneIsRefused) {
+    TempDir dir;
+    Emulate emu = start_emulator(dir);
+    ASSERT_EQ(emu.pty.rfind("/dev/pts/", 0), 0u) << emu.pty;
+    const auto m = run(dir, "circle measure --device serial:" + emu.pty + " --feed 2000 --arc 180 --program '" +
+                                dir.file("circle.nc") + "' --non-interactive --json");
+    ASSERT_EQ(m.code, 0) << m.err << m.out;
+    EXPECT_NE(m.out.find("Feed-in 0.95 mm instead of 1.50 mm"), std::string::npos) << m.out;
+    std::stringstream program;
+    program << std::ifstream(dir.file("circle.nc")).rdbuf();
+    EXPECT_NE(program.str().find("feed-in 0.95 mm"), std::string::npos) << program.str();
+    const auto done = json::parse(m.out.substr(m.out.rfind("{\"event\":\"done\"")));
+    const std::string id = std::to_string(done["session"].get<int>());
+    const auto header = run(dir, "export " + id + " --format trace --out -");
+    EXPECT_NE(header.out.find("\"feed_in_mm\":0.95"), std::string::npos) << header.out.substr(0, 400);
+
+    const auto chosen = run(
+        dir, "circle measure --device serial:" + emu.pty + " --feed 2000 --arc 180 --feed-in 1.5 --non-interactive");
+    stop_emulator(emu);
+    EXPECT_EQ(chosen.code, 2) << chosen.err << chosen.out;
+    EXPECT_NE(chosen.err.find("plan the test with --feed-in 0.95 or less"), std::string::npos) << chosen.err;
 }
 
 TEST(CircleMeasure, AFeedTooFastForTheInstrumentIsRefusedNamingTheHighestUsableFeed) {

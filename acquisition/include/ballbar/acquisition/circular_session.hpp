@@ -60,6 +60,9 @@ class CircularSink {
     /// The instrument can measure this test (its check passed): before anything is asked of the operator.
     /// A sink may create its session here, so that a refused test leaves none.
     virtual void on_instrument_accepted(const InstrumentStatus&) {}
+    /// The session changed the test to fit the instrument (CircularOptions::fit_feed_in), before its
+    /// check: the part program and the stored test header are this one.
+    virtual void on_test_fitted(const analysis::circular::TestSpec&) {}
 };
 
 struct CircularOptions {
@@ -81,11 +84,18 @@ struct CircularOptions {
     /// voids the run.
     double max_gap_s = 0.050;
     double max_lost_fraction = 0.05;
+    /// The feed-in was not chosen by the operator: lower it to what the bar's range holds at the stand
+    /// (95 % of the range, in 0.05 mm steps, never below kMinFittedFeedIn_mm), telling the operator,
+    /// before the instrument check. A feed-in that was chosen is checked and refused if it does not fit.
+    bool fit_feed_in = false;
     /// The first attempt's number (a resumed session goes on counting).
     int first_attempt = 1;
     /// Set from a SIGINT handler: the session ends Aborted with `interrupted` set.
     const std::atomic<bool>* stop = nullptr;
 };
+
+/// The shallowest feed-in fit_feed_in chooses: below it the run finder's fall is lost in the lag.
+inline constexpr double kMinFittedFeedIn_mm = 0.3;
 
 struct CircularSummary {
     State final_state = State::Connecting;
@@ -117,6 +127,8 @@ class CircularSession {
     CircularSession& operator=(const CircularSession&) = delete;
     CircularSummary run();
     State state() const { return sm_.state(); }
+    /// The test as measured (after fit_feed_in).
+    const analysis::circular::TestSpec& test() const { return test_; }
 
   private:
     class Stop {};
@@ -124,6 +136,7 @@ class CircularSession {
     [[noreturn]] void end(Event e, const std::string& reason);
     [[noreturn]] void end_interrupted(const std::string& reason);
     void check_stop();
+    void fit_feed_in();
     /// One run of the program; true when every run was captured.
     bool attempt(int number);
     double run_duration_s(std::size_t run) const;
