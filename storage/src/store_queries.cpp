@@ -147,11 +147,15 @@ std::optional<SampleSegment> Store::segment_of(std::int64_t session_id, std::uin
 
 std::int64_t Store::find_session(std::string_view key) {
     if (key.empty()) throw StorageError(Kind::not_found, "no session given");
-    if (std::all_of(key.begin(), key.end(), [](char c) { return c >= '0' && c <= '9'; }) && key.size() < 18) {
+    const bool digits = std::all_of(key.begin(), key.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (digits && key.size() < 18) {
         auto st = db_.prepare("SELECT id FROM sessions WHERE id = ?");
         st.bind(1, static_cast<std::int64_t>(std::stoll(std::string(key))));
         if (st.step()) return st.column_int(0);
     }
+    // Digits shorter than a uuid's first group (8) are an id, never a uuid prefix: "99" must not find
+    // (or resume) a session whose uuid happens to start with 99.
+    if (digits && key.size() < 8) throw StorageError(Kind::not_found, "no session \"" + std::string(key) + "\"");
     std::string prefix;
     for (const char c : key) {
         const char l = (c >= 'A' && c <= 'F') ? static_cast<char>(c - 'A' + 'a') : c;

@@ -201,6 +201,13 @@ TEST(Store, FindsSessionsByIdOrUuidPrefix) {
     EXPECT_THROW(store.find_session("zz"), StorageError);
     EXPECT_THROW(store.find_session("999"), StorageError);
     EXPECT_EQ(store.sessions().size(), 2u);
+    // A short number is an id only, whatever the uuids start with (CliStorage.SessionsListsAndShows
+    // failed once when a random uuid began with the 99 it asks for); 8 digits and more may be a prefix.
+    store.db().exec("UPDATE sessions SET uuid = '99123456' || substr(uuid, 9) WHERE id = " + std::to_string(b));
+    EXPECT_THROW(store.find_session("99"), StorageError);
+    EXPECT_THROW(store.find_session("9912345"), StorageError);
+    EXPECT_EQ(store.find_session("99123456"), b);
+    EXPECT_EQ(store.find_session("99123456-"), b);
 }
 
 TEST(Store, ReadOnlyOpenOfMissingFileFails) {
