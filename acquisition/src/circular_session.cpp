@@ -25,6 +25,12 @@ std::string fmt(double v, int digits) {
     return os.str();
 }
 
+/// The deepest feed-in the bar's range holds: the machine stands at radius + feed-in before each run,
+/// where the bar reads that less its calibrated length, and that must stay within 95 % of the range.
+double feed_in_room_mm(const circ::TestSpec& test, const InstrumentStatus& status, double range) {
+    return 0.95 * range - (test.radius_mm - status.calibrated_length_mm);
+}
+
 }  // namespace
 
 std::string circular_instrument_mismatch(const circ::TestSpec& test, const InstrumentStatus& status) {
@@ -35,11 +41,12 @@ std::string circular_instrument_mismatch(const circ::TestSpec& test, const Instr
         return "the bar is calibrated at " + fmt(L, 3) + " mm but the test's radius is " + fmt(R, 3) +
                " mm: plan the test with --radius " + fmt(L, 3) +
                " (the bar's length) or fit the extension that makes " + fmt(R, 3) + " mm";
-    if (status.range_mm && R + test.feed_in_mm - L > 0.95 * range + 1e-6)  // (1 nm: rounding, not range)
+    const double room = feed_in_room_mm(test, status, range);
+    if (status.range_mm && test.feed_in_mm > room + 1e-6)  // (1 nm: rounding, not range)
         return "the feed-in of " + fmt(test.feed_in_mm, 3) + " mm leaves the bar's ±" + fmt(range, 3) +
                " mm range (the machine stands at " + fmt(R + test.feed_in_mm - L, 3) +
                " mm from the calibrated length before it): plan the test with --feed-in " +
-               fmt(std::floor((0.95 * range - (R - L)) * 100.0) / 100.0, 2) + " or less";
+               fmt(std::floor(room * 100.0) / 100.0, 2) + " or less";
     if (status.sample_rate_hz > 0) {
         const circ::SamplingLimit lim = circ::sampling_limit(test, status.sample_rate_hz);
         if (test.feed_mm_min > lim.max_feed_mm_min * (1.0 + 1e-9)) {
@@ -88,10 +95,7 @@ void CircularSession::check_stop() {
 
 void CircularSession::fit_feed_in() {
     const double range = *status_.range_mm;
-    // The machine stands at radius + feed-in, the bar reads that less its calibrated length: as in
-    // circular_instrument_mismatch, at most 95 % of the range.
-    const double room = 0.95 * range - (test_.radius_mm - status_.calibrated_length_mm);
-    const double fitted = std::floor(room * 20.0 + 1e-9) / 20.0;
+    const double fitted = std::floor(feed_in_room_mm(test_, status_, range) * 20.0 + 1e-9) / 20.0;
     if (!(test_.feed_in_mm > fitted) || fitted < kMinFittedFeedIn_mm) return;  // fits, or the check refuses
     op_.message("Feed-in " + fmt(fitted, 2) + " mm instead of " + fmt(test_.feed_in_mm, 2) +
                 " mm: the stand before each run stays within the bar's ±" + fmt(range, 3) +

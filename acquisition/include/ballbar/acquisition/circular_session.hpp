@@ -127,8 +127,6 @@ class CircularSession {
     CircularSession& operator=(const CircularSession&) = delete;
     CircularSummary run();
     State state() const { return sm_.state(); }
-    /// The test as measured (after fit_feed_in).
-    const analysis::circular::TestSpec& test() const { return test_; }
 
   private:
     class Stop {};
