@@ -2,9 +2,11 @@
 #include <unistd.h>
 #if defined(__GLIBC__)
 #include <malloc.h>
+#include <sys/mman.h>
 #endif
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -112,6 +114,24 @@ std::optional<std::string> unknown_command(const CLI::App& root, int argc, char*
     return std::nullopt;
 }
 
+#if defined(__GLIBC__)
+/// Grows the heap by `bytes` of address space (nothing is touched) and asks the kernel to back the
+/// part aligned to 2 MiB with transparent huge pages, then frees it to the heap's top, where the next
+/// large buffers are carved from. A 4 KiB page costs a fault each time a buffer first touches it, and
+/// on a virtual machine a fault costs tens of µs: `circle analyze` of 10⁵ samples took 6,300 faults,
+/// about half its time (bench/circular). Where the kernel has no huge pages for madvise, madvise
+/// fails and nothing changes.
+void reserve_heap_on_huge_pages(std::size_t bytes) {
+    constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
+    void* block = std::malloc(bytes);
+    if (block == nullptr) return;
+    const auto at = reinterpret_cast<std::uintptr_t>(block);
+    const std::uintptr_t begin = (at + kHuge - 1) & ~(kHuge - 1), end = (at + bytes) & ~(kHuge - 1);
+    if (end > begin) (void)madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+    std::free(block);
+}
+#endif
+
 }  // namespace
 }  // namespace ballbar::app
 
@@ -124,6 +144,7 @@ int main(int argc, char** argv) {
     // heap for reuse instead: a command lives seconds, or holds little.
     mallopt(M_MMAP_THRESHOLD, 256 << 20);
     mallopt(M_TRIM_THRESHOLD, 512 << 20);
+    reserve_heap_on_huge_pages(std::size_t{128} << 20);
 #endif
     CLI::App root{"ballbar: guided ball-bar measurement and error analysis of five-axis machine tools", "ballbar"};
     root.set_version_flag("--version", std::string("ballbar ") + ballbar::kVersion);
