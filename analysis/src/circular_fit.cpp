@@ -546,7 +546,9 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
 }
 
 /// Searches the residual for a vibration: the largest line of its spectrum on a uniform time grid.
-Peak search_vibration(const FitInput& in, const Eigen::VectorXd& resid, const AnalysisOptions& opt) {
+/// `fft` keeps its plan (the twiddle factors) between the searches of one fit: they are all the same size.
+Peak search_vibration(const FitInput& in, const Eigen::VectorXd& resid, const AnalysisOptions& opt,
+                      Eigen::FFT<double>& fft) {
     Peak peak;
     const double fs = in.sample_rate_hz;
     if (!(fs > 0.0)) return peak;
@@ -562,8 +564,6 @@ Peak search_vibration(const FitInput& in, const Eigen::VectorXd& resid, const An
         const auto cell = static_cast<std::size_t>(std::llround((in.points[i].t - t0) / dt));
         if (cell < nfft) grid[cell] = resid[static_cast<Eigen::Index>(i)];
     }
-    Eigen::FFT<double> fft;
-    fft.SetFlag(Eigen::FFT<double>::HalfSpectrum);
     std::vector<std::complex<double>> spec;
     fft.fwd(spec, grid);
     const double df = fs / static_cast<double>(nfft);
@@ -636,13 +636,15 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
     run_fit(ids);
 
     // Cyclic errors and vibration, the strongest first, each searched on what the others left.
+    Eigen::FFT<double> fft;
+    fft.SetFlag(Eigen::FFT<double>::HalfSpectrum);
     bool want_p = true, want_q = true, want_v = true;
     while (want_p || want_q || want_v) {
         Peak best;
         int which = -1;
         const Peak cands[3] = {want_p ? search_cyclic(in, model, st, sol.residual, 0, opt) : Peak{},
                                want_q ? search_cyclic(in, model, st, sol.residual, 1, opt) : Peak{},
-                               want_v ? search_vibration(in, sol.residual, opt) : Peak{}};
+                               want_v ? search_vibration(in, sol.residual, opt, fft) : Peak{}};
         for (int c = 0; c < 3; ++c)
             if (cands[c].found && cands[c].strength > best.strength) best = cands[c], which = c;
         if (which < 0) break;

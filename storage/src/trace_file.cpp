@@ -306,8 +306,11 @@ TraceFile parse_trace(std::string_view text) {
             throw TraceFileError(
                 no, "measured_mm \"" + std::string(fields[static_cast<std::size_t>(c_len)]) + "\" is not a number");
         if (*m <= 0.0) throw TraceFileError(no, "measured_mm must be > 0");
-        for (const auto& [name, v] : {std::pair{"time_s", *t}, std::pair{"measured_mm", *m}})
-            if (const std::string why = column_problem(name, v); !why.empty()) throw TraceFileError(no, why);
+        // In range (NaN and ±inf fail these comparisons too), or column_problem says why not.
+        namespace lim = analysis::limits;
+        if (!(*t >= -lim::kTime_s && *t <= lim::kTime_s && *m > 0.0 && *m <= lim::kLength_mm))
+            for (const auto& [name, v] : {std::pair{"time_s", *t}, std::pair{"measured_mm", *m}})
+                if (const std::string why = column_problem(name, v); !why.empty()) throw TraceFileError(no, why);
         if (!out.samples.empty() && !(*t > out.samples.back().time_s))
             throw TraceFileError(no, "time_s " + shortest(*t) + " is not after the previous row's (" +
                                          shortest(out.samples.back().time_s) + "): it must strictly increase");
