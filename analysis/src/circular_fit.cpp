@@ -145,31 +145,35 @@ class Model {
                 std::cos(phq),
                 std::sin(phq)};
     }
-    /// Radial deviation (µm) the lags cause at a point, cos θ and sin θ given.
-    double lag_um(double c0, double s0, int dir, const Lag& l) const {
-        const double c = l.ap * (c0 * l.cp + dir * s0 * l.sp);
-        const double s = l.aq * (s0 * l.cq - dir * c0 * l.sq);
-        return 1e3 * r_ * (std::sqrt(c * c + s * s) - 1.0);
-    }
-
     /// The design for the state `st` and the columns `ids`, and the data less the lag's deviation.
     /// Rows in blocks: first what several columns share, for a block of points, then each column's
     /// block in one loop (the columns are stored apart, so each loop writes one run of memory).
-    void build(const State& st, const std::vector<int>& ids, Design& d) const {
+    /// With `first` > 0, `d` holds the columns ids[0, first) already and only the rest are built:
+    /// the data (`d.y`) stays as it is, linearised where the design it extends was.
+    void build(const State& st, const std::vector<int>& ids, Design& d, std::size_t first = 0) const {
         const auto n = static_cast<Eigen::Index>(in_.points.size());
-        d.ids = ids;
         const auto m = static_cast<Eigen::Index>(ids.size());
+        if (first > 0 && !(d.used == static_cast<Eigen::Index>(first) && d.buffer.rows() == n &&
+                           std::equal(d.ids.begin(), d.ids.end(), ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(first))))
+            throw CircularError("internal: a design extended by columns it does not hold");
+        d.ids = ids;
         if (d.buffer.rows() != n || d.buffer.cols() < m) d.buffer.resize(n, std::max<Eigen::Index>(m, kDf + 1));
         d.used = m;
-        d.y.resize(n);
-        auto has = [&](int id) { return std::find(ids.begin(), ids.end(), id) != ids.end(); };
+        const bool with_y = first == 0;
+        if (with_y) d.y.resize(n);
+        auto has = [&](int id) {
+            return std::find(ids.begin() + static_cast<std::ptrdiff_t>(first), ids.end(), id) != ids.end();
+        };
         const bool servo = has(kServo);
         const double tp = std::max(st.tau_mean_s + 0.5e-3 * st.dtau_ms, 0.0);
         const double tq = std::max(st.tau_mean_s - 0.5e-3 * st.dtau_ms, 0.0);
         const Lag lag0 = lag_of(tp, tq);
-        constexpr double h_ms = 0.01;
-        const double up = 0.5e-3 * h_ms;
-        const Lag lag_hi = lag_of(tp + up, tq - up), lag_lo = lag_of(tp - up, tq + up);
+        // The servo column: the lag's deviation differentiated in the lag difference (τp = τ̄ + Δτ/2,
+        // τq = τ̄ − Δτ/2). With u = ωτp, the p axis's share of the radius is c = (cos θ + dir·sin θ·u)/(1 + u²),
+        // so dc/du = (dir·sin θ − 2u·c)/(1 + u²); the q axis's likewise, with v = ωτq and the other sign.
+        const double u = w_ * tp, v = w_ * tq;
+        const double ku = 1.0 / (1.0 + u * u), kv = 1.0 / (1.0 + v * v);
+        const double servo_scale = 1e3 * r_ * 0.5e-3 * w_;  // µm per unit of dc, and dτp/dΔτ (ms → s)
         const double phm = std::atan(w_ * st.tau_mean_s);
         const double cm = std::cos(phm), sm = std::sin(phm);
         const double php = std::atan(w_ * tp), phq = std::atan(w_ * tq);
@@ -203,10 +207,17 @@ class Model {
                 spx[j] = s0 * lag0.cp - dir * c0 * lag0.sp;
                 cqx[j] = c0 * lag0.cq + dir * s0 * lag0.sq;
                 const double sqx = s0 * lag0.cq - dir * c0 * lag0.sq;
-                const double lag = lag_um(c0, s0, dir, lag0);
                 servo_col[j] = 0.0;
-                if (servo) servo_col[j] = (lag_um(c0, s0, dir, lag_hi) - lag_um(c0, s0, dir, lag_lo)) / (2.0 * h_ms);
-                d.y[b0 + j] = pt.y_um - (lag - servo_col[j] * st.dtau_ms);
+                if (servo || with_y) {
+                    // The lags' radial deviation (µm) is 1e3·R·(|(c, s)| − 1): the axes' shares of the radius
+                    // through their lags' amplitude and phase.
+                    const double c = lag0.ap * cpx, s = lag0.aq * sqx;
+                    const double norm = std::sqrt(c * c + s * s);
+                    if (servo)
+                        servo_col[j] =
+                            servo_scale * (c * (dir * s0 - 2.0 * u * c) * ku + s * (dir * c0 + 2.0 * v * s) * kv) / norm;
+                    if (with_y) d.y[b0 + j] = pt.y_um - (1e3 * r_ * (norm - 1.0) - servo_col[j] * st.dtau_ms);
+                }
                 // Cyclic phases about the centre: the same family as about the origin, better conditioned in k.
                 xp[j] = r_ * cpx, xq[j] = r_ * sqx;
                 if (cyc_p) {
@@ -220,7 +231,7 @@ class Model {
             }
             const double* vs = vib ? d.vib_sin.data() + b0 : nullptr;
             const double* vc = vib ? d.vib_cos.data() + b0 : nullptr;
-            for (Eigen::Index c = 0; c < m; ++c) {
+            for (auto c = static_cast<Eigen::Index>(first); c < m; ++c) {
                 double* col = d.buffer.col(c).data() + b0;
                 switch (ids[static_cast<std::size_t>(c)]) {
                     case kConst:
@@ -329,15 +340,44 @@ class Model {
     std::vector<double> cos_, sin_;
 };
 
-/// Least squares on the design, into `s` (its vectors reused from the last solve: no new n-long ones).
-void solve(const Design& d, Solution& s) {
+/// The normal equations of a design: XᵀX (whole, not only a triangle) and Xᵀy.
+struct Normal {
+    Eigen::MatrixXd a;
+    Eigen::VectorXd b;
+};
+
+/// The normal equations of the whole design.
+void normal_full(const Design& d, Normal& ne) {
+    const Eigen::Index m = d.x().cols();
+    ne.a = Eigen::MatrixXd::Zero(m, m);
+    ne.a.selfadjointView<Eigen::Lower>().rankUpdate(d.x().transpose());
+    ne.a = ne.a.selfadjointView<Eigen::Lower>();
+    ne.b = d.x().transpose() * d.y;
+}
+
+/// `ne` holds the normal equations of the design's first `from` columns, and columns were appended
+/// since (the data unchanged): only the products with the new columns are computed.
+void normal_append(const Design& d, Eigen::Index from, Normal& ne) {
+    const Eigen::Index m = d.x().cols(), k = m - from;
+    const auto added = d.buffer.middleCols(from, k);
+    const Eigen::MatrixXd cross = d.x().transpose() * added;  // m × k: the new columns against all
+    Eigen::MatrixXd a(m, m);
+    a.topLeftCorner(from, from) = ne.a;
+    a.rightCols(k) = cross;
+    a.bottomLeftCorner(k, from) = cross.topRows(from).transpose();
+    ne.a = std::move(a);
+    ne.b.conservativeResize(m);
+    ne.b.tail(k) = added.transpose() * d.y;
+}
+
+/// Least squares on the design from its normal equations, into `s` (its vectors reused from the
+/// last solve: no new n-long ones).
+void solve(const Design& d, const Normal& ne, Solution& s) {
     const Eigen::Index m = d.x().cols(), n = d.x().rows();
-    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m, m);
-    a.selfadjointView<Eigen::Lower>().rankUpdate(d.x().transpose());
-    a = a.selfadjointView<Eigen::Lower>();
+    const Eigen::MatrixXd& a = ne.a;
     Eigen::VectorXd scale = a.diagonal().cwiseSqrt().cwiseMax(1e-300).cwiseInverse();
     const Eigen::MatrixXd as = scale.asDiagonal() * a * scale.asDiagonal();
-    const Eigen::VectorXd b = scale.asDiagonal() * (d.x().transpose() * d.y);
+    const Eigen::VectorXd b = scale.asDiagonal() * ne.b;
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(as);
     s.beta = scale.asDiagonal() * ldlt.solve(b);
     s.residual = d.y;
@@ -426,37 +466,26 @@ struct Peak {
     bool found = false;
 };
 
-/// The sums of one grid frequency's 2×2 fit: sin², sin·cos, cos², y·sin, y·cos (each weighted).
+/// The sums of one grid frequency's 2×2 fit, each weighted: sin², sin·cos, y·sin, y·cos (cos² is the
+/// weights' squares less sin²).
 struct GridSums {
-    double ss = 0, sc = 0, cc = 0, ys = 0, yc = 0;
+    double ss = 0, sc = 0, ys = 0, yc = 0;
 };
-constexpr std::size_t kGridBlock = 1;
 
-/// The sums of NB successive grid frequencies in one pass over the points, two points at a time in
-/// the two lanes of a packet (SSE2 on any x86-64): each point's phasor (zr, zi) is turned by one grid
-/// step (sr, si) after each frequency. m is even (the arrays are padded with a point of weight 0, which
-/// adds exactly nothing). Each lane sums half the points; the halves are added at the end.
-template <std::size_t NB>
-void grid_sums(std::size_t m, const double* w, const double* y, const double* sr, const double* si, double* zr,
-               double* zi, GridSums* out) {
+/// One grid frequency's sums in one pass over the points, two points at a time in the two lanes of a
+/// packet (SSE2 on any x86-64), each lane summing half the points; each point's weighted phasor
+/// (zr, zi) = w·(cos, sin) is then turned by one grid step (sr, si) for the next frequency. m is even
+/// (the arrays are padded with a point of weight 0, which adds exactly nothing).
+GridSums grid_sums(std::size_t m, const double* y, const double* sr, const double* si, double* zr, double* zi) {
     using Lane = Eigen::Array2d;
-    struct Acc {
-        Lane ss = Lane::Zero(), sc = Lane::Zero(), cc = Lane::Zero(), ys = Lane::Zero(), yc = Lane::Zero();
-    };
-    Acc acc[NB];
+    Lane ss = Lane::Zero(), sc = Lane::Zero(), ys = Lane::Zero(), yc = Lane::Zero();
     for (std::size_t i = 0; i < m; i += 2) {
-        Lane re = Lane::Map(zr + i), im = Lane::Map(zi + i);
-        const Lane wi = Lane::Map(w + i), yi = Lane::Map(y + i), c_step = Lane::Map(sr + i), s_step = Lane::Map(si + i);
-        for (std::size_t j = 0; j < NB; ++j) {
-            const Lane s = im * wi, c = re * wi;
-            acc[j].ss += s * s, acc[j].sc += s * c, acc[j].cc += c * c, acc[j].ys += yi * s, acc[j].yc += yi * c;
-            const Lane re_next = re * c_step - im * s_step, im_next = re * s_step + im * c_step;
-            re = re_next, im = im_next;
-        }
-        Lane::Map(zr + i) = re, Lane::Map(zi + i) = im;
+        const Lane re = Lane::Map(zr + i), im = Lane::Map(zi + i);
+        const Lane yi = Lane::Map(y + i), c_step = Lane::Map(sr + i), s_step = Lane::Map(si + i);
+        ss += im * im, sc += im * re, ys += yi * im, yc += yi * re;
+        Lane::Map(zr + i) = re * c_step - im * s_step, Lane::Map(zi + i) = re * s_step + im * c_step;
     }
-    for (std::size_t j = 0; j < NB; ++j)
-        out[j] = {acc[j].ss.sum(), acc[j].sc.sum(), acc[j].cc.sum(), acc[j].ys.sum(), acc[j].yc.sum()};
+    return {ss.sum(), sc.sum(), ys.sum(), yc.sum()};
 }
 
 /// Searches the residual for a cyclic error of one axis: 2×2 fits over a grid of spatial
@@ -497,29 +526,21 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
     // Even length for the two lanes of grid_sums: a last point of weight 0 if m is odd.
     const std::size_t m2 = m + (m % 2);
     w.resize(m2, 0.0), y.resize(m2, 0.0);
-    std::vector<double> zr(m2, 1.0), zi(m2, 0.0), sr(m2, 1.0), si(m2, 0.0);
+    std::vector<double> zr(m2, 0.0), zi(m2, 0.0), sr(m2, 1.0), si(m2, 0.0);
+    double ww = 0.0;
     for (std::size_t i = 0; i < m; ++i) {
-        zr[i] = std::cos(2.0 * kPi * kmin * x[i]), zi[i] = std::sin(2.0 * kPi * kmin * x[i]);
+        zr[i] = w[i] * std::cos(2.0 * kPi * kmin * x[i]), zi[i] = w[i] * std::sin(2.0 * kPi * kmin * x[i]);
         sr[i] = std::cos(2.0 * kPi * dk * x[i]), si[i] = std::sin(2.0 * kPi * dk * x[i]);
-    }
-    std::vector<double> grid;
-    for (double k = kmin; k <= kmax; k += dk) grid.push_back(k);
-    std::vector<GridSums> sums(grid.size());
-    for (std::size_t g = 0; g < grid.size(); g += kGridBlock) {
-        if (grid.size() - g >= kGridBlock) {
-            grid_sums<kGridBlock>(m2, w.data(), y.data(), sr.data(), si.data(), zr.data(), zi.data(), &sums[g]);
-        } else {
-            for (std::size_t h = g; h < grid.size(); ++h)
-                grid_sums<1>(m2, w.data(), y.data(), sr.data(), si.data(), zr.data(), zi.data(), &sums[h]);
-        }
+        ww += w[i] * w[i];
     }
     double best = -1.0, best_k = kmin;
-    for (std::size_t g = 0; g < grid.size(); ++g) {
-        const auto& [sss, ssc, scc, sys, syc] = sums[g];
+    for (double k = kmin; k <= kmax; k += dk) {
+        const auto [sss, ssc, sys, syc] = grid_sums(m2, y.data(), sr.data(), si.data(), zr.data(), zi.data());
+        const double scc = ww - sss;
         const double det = sss * scc - ssc * ssc;
         if (det <= 0.0) continue;
         const double red = ((scc * sys - ssc * syc) * sys + (sss * syc - ssc * sys) * syc) / det;
-        if (red > best) best = red, best_k = grid[g];
+        if (red > best) best = red, best_k = k;
     }
     double lo = std::max(kmin, best_k - dk), hi = std::min(kmax, best_k + dk);
     const double gr = (std::sqrt(5.0) - 1.0) / 2.0;
@@ -536,8 +557,8 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
     double as = 0.0, ac = 0.0;
     const double red = reduction_at(peak.k, &as, &ac);
     peak.amp = std::hypot(as, ac);
-    double yy = 0.0, ww = 0.0;
-    for (std::size_t i = 0; i < m; ++i) yy += y[i] * y[i], ww += w[i] * w[i];
+    double yy = 0.0;
+    for (std::size_t i = 0; i < m; ++i) yy += y[i] * y[i];
     const double sigma = std::sqrt(std::max(yy - red, 0.0) / static_cast<double>(std::max<std::size_t>(m, 3) - 2));
     const double amp_sigma = sigma * std::sqrt(2.0 / std::max(ww, 1e-300));
     peak.found = peak.amp > 6.0 * amp_sigma && peak.amp > 0.1;
@@ -626,12 +647,27 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
     const bool servo = std::find(ids.begin(), ids.end(), kServo) != ids.end();
 
     Solution sol;
-    auto run_fit = [&](const std::vector<int>& cols) {
-        model.build(st, cols, d);
-        solve(d, sol);
+    Normal ne;
+    auto after_solve = [&] {
         const int sv = d.col(kServo);
         if (sv >= 0) st.dtau_ms = sol.beta[sv];
         update_tau_mean();
+    };
+    // A fit from scratch: the design and the data linearised about the lag of `st`.
+    auto run_fit = [&](const std::vector<int>& cols) {
+        model.build(st, cols, d);
+        normal_full(d, ne);
+        solve(d, ne, sol);
+        after_solve();
+    };
+    // A fit of the design with columns appended (the searches' terms): the columns it has and the data
+    // stay linearised where they were; the lag is taken up again by the Gauss–Newton steps below.
+    auto run_fit_appended = [&](const std::vector<int>& cols) {
+        const Eigen::Index from = d.used;
+        model.build(st, cols, d, static_cast<std::size_t>(from));
+        normal_append(d, from, ne);
+        solve(d, ne, sol);
+        after_solve();
     };
     run_fit(ids);
 
@@ -651,7 +687,7 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
         if (which == 0) st.kp = best.k, want_p = false, ids.insert(ids.end(), {kCycPs, kCycPc});
         if (which == 1) st.kq = best.k, want_q = false, ids.insert(ids.end(), {kCycQs, kCycQc});
         if (which == 2) st.f_hz = best.k, want_v = false, ids.insert(ids.end(), {kVibS, kVibC});
-        run_fit(ids);
+        run_fit_appended(ids);
     }
     // Gauss–Newton on pitches and frequency (and the lag) together with everything linear.
     std::vector<int> gn = ids;
