@@ -697,7 +697,9 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
     const double dk = 1.0 / (10.0 * model.radius());
     const double fspan = 1.0 / std::max(2.0 * std::abs(in.points.back().t - model.t_mid()), 1e-3);
     // The last solve is the result: derivative columns included, so pitch and frequency carry
-    // uncertainties (their step there is the last correction, not applied).
+    // uncertainties (their step there is the last correction, not applied). The first step's design
+    // is the searches' with the derivative columns appended; the last is rebuilt whole where the
+    // steps and the lag have brought the state.
     const int iterations = gn.size() > ids.size() ? 2 : servo ? 1 : 0;
     for (int it = 0; it < iterations; ++it) {
         auto take = [&](int s, int c, double& as, double& ac) {
@@ -706,7 +708,10 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
         take(kCycPs, kCycPc, st.ap_s, st.ap_c);
         take(kCycQs, kCycQc, st.aq_s, st.aq_c);
         take(kVibS, kVibC, st.av_s, st.av_c);
-        run_fit(gn);
+        if (it + 1 < iterations)
+            run_fit_appended(gn);
+        else
+            run_fit(gn);
         if (it + 1 == iterations) break;
         if (d.col(kDkP) >= 0) st.kp += std::clamp(sol.beta[d.col(kDkP)], -dk, dk);
         if (d.col(kDkQ) >= 0) st.kq += std::clamp(sol.beta[d.col(kDkQ)], -dk, dk);
