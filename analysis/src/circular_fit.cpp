@@ -153,8 +153,9 @@ class Model {
     void build(const State& st, const std::vector<int>& ids, Design& d, std::size_t first = 0) const {
         const auto n = static_cast<Eigen::Index>(in_.points.size());
         const auto m = static_cast<Eigen::Index>(ids.size());
-        if (first > 0 && !(d.used == static_cast<Eigen::Index>(first) && d.buffer.rows() == n &&
-                           std::equal(d.ids.begin(), d.ids.end(), ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(first))))
+        if (first > 0 &&
+            !(d.used == static_cast<Eigen::Index>(first) && d.buffer.rows() == n &&
+              std::equal(d.ids.begin(), d.ids.end(), ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(first))))
             throw CircularError("internal: a design extended by columns it does not hold");
         d.ids = ids;
         if (d.buffer.rows() != n || d.buffer.cols() < m) d.buffer.resize(n, std::max<Eigen::Index>(m, kDf + 1));
@@ -214,8 +215,8 @@ class Model {
                     const double c = lag0.ap * cpx, s = lag0.aq * sqx;
                     const double norm = std::sqrt(c * c + s * s);
                     if (servo)
-                        servo_col[j] =
-                            servo_scale * (c * (dir * s0 - 2.0 * u * c) * ku + s * (dir * c0 + 2.0 * v * s) * kv) / norm;
+                        servo_col[j] = servo_scale *
+                                       (c * (dir * s0 - 2.0 * u * c) * ku + s * (dir * c0 + 2.0 * v * s) * kv) / norm;
                     if (with_y) d.y[b0 + j] = pt.y_um - (1e3 * r_ * (norm - 1.0) - servo_col[j] * st.dtau_ms);
                 }
                 // Cyclic phases about the centre: the same family as about the origin, better conditioned in k.
@@ -406,7 +407,9 @@ struct Separability {
 Separability check_separability(const Design& d, const FitInput& in, const AnalysisOptions& opt) {
     Separability out;
     const Eigen::Index m = d.x().cols();
-    Eigen::MatrixXd g = d.x().transpose() * d.x();
+    Eigen::MatrixXd g = Eigen::MatrixXd::Zero(m, m);
+    g.selfadjointView<Eigen::Lower>().rankUpdate(d.x().transpose());
+    g = g.selfadjointView<Eigen::Lower>();
     const Eigen::VectorXd nrm = g.diagonal().cwiseSqrt().cwiseMax(1e-300);
     for (Eigen::Index i = 0; i < m; ++i)
         for (Eigen::Index j = 0; j < m; ++j) g(i, j) /= nrm[i] * nrm[j];
@@ -723,10 +726,20 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
     out.mean_radius_std_um = std::sqrt(sol.cov(d.col(kConst), d.col(kConst)));
     out.lag_mean_s = st.tau_mean_s;
 
+    // Peak to valley of the terms' part of the fit, over the data. One column: its value times a
+    // constant, and rounding a product is monotonic in the column, so the extremes are the column's
+    // (swapped for a negative constant) — the same numbers as evaluating every row.
     auto contribution = [&](std::initializer_list<int> cols) {
         std::vector<int> at;  // the design's columns of these terms, looked up once
         for (int c : cols)
             if (d.col(c) >= 0) at.push_back(d.col(c));
+        if (at.empty() || d.x().rows() == 0) return 0.0;
+        if (at.size() == 1) {
+            const auto col = d.x().col(at[0]);
+            const double b = sol.beta[at[0]];
+            const double hi = col.maxCoeff() * b, lo = col.minCoeff() * b;
+            return b >= 0.0 ? hi - lo : lo - hi;
+        }
         double lo = 0.0, hi = 0.0;
         for (Eigen::Index i = 0; i < d.x().rows(); ++i) {
             double v = 0.0;

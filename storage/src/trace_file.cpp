@@ -142,8 +142,8 @@ class LineCursor {
         return true;
     }
     int number() const { return number_; }  ///< of the line next() gave last
-    std::size_t lines_left() const {  ///< at most; to reserve
-        std::size_t count = 1;            // memchr, not std::count: a 2 MB file's newlines in a few µs
+    std::size_t lines_left() const {        ///< at most; to reserve
+        std::size_t count = 1;              // memchr, not std::count: a 2 MB file's newlines in a few µs
         for (auto at = pos_; (at = text_.find('\n', at)) != std::string_view::npos; ++at) ++count;
         return count;
     }
