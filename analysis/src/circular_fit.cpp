@@ -120,7 +120,10 @@ class Model {
   public:
     Model(const FitInput& in) : in_(in), r_(in.test.radius_mm), w_(in.omega_rad_s) {
         cos_.reserve(in.points.size()), sin_.reserve(in.points.size());
-        for (const auto& p : in.points) cos_.push_back(std::cos(p.theta)), sin_.push_back(std::sin(p.theta));
+        for (const auto& p : in.points) {  // cos and sin of one angle side by side: one sincos call
+            const double c = std::cos(p.theta), s = std::sin(p.theta);
+            cos_.push_back(c), sin_.push_back(s);
+        }
         const auto axis = plane_axis_index(in.test.plane);
         cp_ = in.test.centre_mm[static_cast<std::size_t>(axis[0])];
         cq_ = in.test.centre_mm[static_cast<std::size_t>(axis[1])];
