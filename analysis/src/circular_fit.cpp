@@ -548,11 +548,13 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
         const double red = ((scc * sys - ssc * syc) * sys + (sss * syc - ssc * sys) * syc) / det;
         if (red > best) best = red, best_k = k;
     }
+    // Golden section about the grid's best: 10 steps narrow the two grid steps to 2 % of one, from
+    // where the Gauss–Newton step on the pitch (fit_diagnostics) converges.
     double lo = std::max(kmin, best_k - dk), hi = std::min(kmax, best_k + dk);
     const double gr = (std::sqrt(5.0) - 1.0) / 2.0;
     double a = hi - gr * (hi - lo), b = lo + gr * (hi - lo);
     double fa = reduction_at(a, nullptr, nullptr), fb = reduction_at(b, nullptr, nullptr);
-    for (int it = 0; it < 16; ++it) {
+    for (int it = 0; it < 10; ++it) {
         if (fa > fb) {
             hi = b, b = a, fb = fa, a = hi - gr * (hi - lo), fa = reduction_at(a, nullptr, nullptr);
         } else {
