@@ -124,9 +124,6 @@ class Model {
             const double c = std::cos(p.theta), s = std::sin(p.theta);
             cos_.push_back(c), sin_.push_back(s);
         }
-        const auto axis = plane_axis_index(in.test.plane);
-        cp_ = in.test.centre_mm[static_cast<std::size_t>(axis[0])];
-        cq_ = in.test.centre_mm[static_cast<std::size_t>(axis[1])];
         double lo = in.points.front().t, hi = lo;
         for (const auto& p : in.points) lo = std::min(lo, p.t), hi = std::max(hi, p.t);
         t_mid_ = 0.5 * (lo + hi);
@@ -275,7 +272,9 @@ class Model {
                             col[j] = r_ * 1e-3 * 0.5 * (ca[j] * ca[j] - sa[j] * sa[j]);
                         break;
                     case kSquare:
-                        for (Eigen::Index j = 0; j < len; ++j) col[j] = 1e-3 * (cq_ + r_ * sa[j]) * ca[j];
+                        // e_p = α·q with q = q_c + R sin θ: the q_c·cos θ part moves the circle's centre
+                        // only (the centre's column), so the signature is what is left, R·sin θ·cos θ.
+                        for (Eigen::Index j = 0; j < len; ++j) col[j] = 1e-3 * r_ * sa[j] * ca[j];
                         break;
                     case kServo:
                         for (Eigen::Index j = 0; j < len; ++j) col[j] = servo_col[j];
@@ -340,7 +339,7 @@ class Model {
 
   private:
     const FitInput& in_;
-    double r_, w_, cp_ = 0.0, cq_ = 0.0, t_mid_ = 0.0, path_mm_ = 0.0;
+    double r_, w_, t_mid_ = 0.0, path_mm_ = 0.0;
     std::vector<double> cos_, sin_;
 };
 

@@ -3,6 +3,8 @@
 // (tests/circular/trace_generator.*), judged by the acceptance rule of tests/circular/accuracy.hpp;
 // prints, per diagnostic, the count injected and absent, the largest error relative to its
 // tolerance and the pass rate.   bench_circular_accuracy [--cases N] [--seed S] [--only I] [--verbose]
+// [--write FILE]: with --only, also writes that case as a ballbar-trace/1 file (a new file only), to
+// look at it with `ballbar circle analyze FILE`.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -18,6 +20,7 @@ int main(int argc, char** argv) {
     int cases = 1000, only = -1;
     unsigned long long seed = 1;
     bool verbose = false;
+    const char* write_to = nullptr;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--cases") && i + 1 < argc)
             cases = std::atoi(argv[++i]);
@@ -27,8 +30,10 @@ int main(int argc, char** argv) {
             only = std::atoi(argv[++i]);
         else if (!std::strcmp(argv[i], "--verbose"))
             verbose = true;
+        else if (!std::strcmp(argv[i], "--write") && i + 1 < argc)
+            write_to = argv[++i];
         else {
-            std::fprintf(stderr, "usage: bench_circular_accuracy [--cases N] [--seed S] [--only I] [--verbose]\n");
+            std::fprintf(stderr, "usage: bench_circular_accuracy [--cases N] [--seed S] [--only I] [--verbose] [--write FILE]\n");
             return 2;
         }
     }
@@ -45,6 +50,15 @@ int main(int argc, char** argv) {
         const GenCase c = random_case(rng);
         const GenTrace g = generate(c.spec, c.fx, rng);
         if (only >= 0 && i != only) continue;
+        if (write_to != nullptr && only >= 0) {
+            std::FILE* out = std::fopen(write_to, "wbx");  // never over a file this did not create
+            const std::string text = to_file(c.spec, g);
+            if (out == nullptr || std::fwrite(text.data(), 1, text.size(), out) != text.size() || std::fclose(out) != 0) {
+                std::fprintf(stderr, "bench_circular_accuracy: cannot write %s (it exists, or the disk refused)\n",
+                             write_to);
+                return 1;
+            }
+        }
         circ::CircularResult r;
         const auto t0 = std::chrono::steady_clock::now();
         try {
