@@ -86,6 +86,30 @@ TEST(CircularAnalysis, ReportsTheResidualAndRanksTheShares) {
     EXPECT_LT(std::abs(sq->value - 20.0), 5.0 * sq->std_uncertainty + 1.0);
 }
 
+// A test far from the machine's q = 0 (the socket on a fixture): squareness moves p by α·q, and the
+// α·q_c part is only a shift of the centre. It must not bury the sin 2θ part that tells squareness
+// apart, on a half circle too (accuracy case 921 of seed 1 was called unseparable from the centre),
+// and its share is of the circle's shape, not of the shift.
+TEST(CircularAnalysis, SquarenessFarFromTheAxisOriginIsStillSeparable) {
+    for (const bool partial : {false, true}) {
+        std::mt19937_64 rng(8);
+        GenSpec s = base_spec(0, partial);
+        s.centre_mm = {200.0, 300.0, 100.0};
+        s.radius_mm = 55.0;
+        GenEffects fx;
+        fx.squareness_um_per_m = 30.0;
+        fx.backlash_um = {5.0, 0.0};
+        const GenTrace g = generate(s, fx, rng);
+        const auto r = circ::analyze_circular(to_test(s), to_samples(g));
+        EXPECT_FALSE(has_group_with(r, {"squareness_um_per_m"})) << (partial ? "half circle" : "full circle");
+        const auto* sq = r.find(circ::Diag::Squareness);
+        ASSERT_NE(sq, nullptr) << (partial ? "half circle" : "full circle");
+        EXPECT_NEAR(sq->value, 30.0, 6.0);
+        // Its peak to valley is that of 10⁻³·α·(R/2)·sin 2θ: at most 1.65 µm, not the 18 µm of α·q_c·cos θ.
+        EXPECT_LT(sq->contribution_um, 1e-3 * 30.0 * 55.0 * 1.2) << (partial ? "half circle" : "full circle");
+    }
+}
+
 TEST(CircularAnalysis, RefusesATraceThatEndsBeforeTheSecondRun) {
     std::mt19937_64 rng(6);
     const GenSpec s = base_spec(0, false);
