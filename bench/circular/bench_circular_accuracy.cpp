@@ -33,7 +33,9 @@ int main(int argc, char** argv) {
         else if (!std::strcmp(argv[i], "--write") && i + 1 < argc)
             write_to = argv[++i];
         else {
-            std::fprintf(stderr, "usage: bench_circular_accuracy [--cases N] [--seed S] [--only I] [--verbose] [--write FILE]\n");
+            std::fprintf(
+                stderr,
+                "usage: bench_circular_accuracy [--cases N] [--seed S] [--only I] [--verbose] [--write FILE]\n");
             return 2;
         }
     }
@@ -53,7 +55,8 @@ int main(int argc, char** argv) {
         if (write_to != nullptr && only >= 0) {
             std::FILE* out = std::fopen(write_to, "wbx");  // never over a file this did not create
             const std::string text = to_file(c.spec, g);
-            if (out == nullptr || std::fwrite(text.data(), 1, text.size(), out) != text.size() || std::fclose(out) != 0) {
+            if (out == nullptr || std::fwrite(text.data(), 1, text.size(), out) != text.size() ||
+                std::fclose(out) != 0) {
                 std::fprintf(stderr, "bench_circular_accuracy: cannot write %s (it exists, or the disk refused)\n",
                              write_to);
                 return 1;
