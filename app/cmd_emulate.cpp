@@ -4,6 +4,7 @@
 // (tcp:127.0.0.1:PORT). Prints where it listens on stdout (one line; a new line after each simulated
 // reconnect) and serves until SIGINT/SIGTERM.
 #include <csignal>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -34,8 +35,19 @@ int run_emulate(const EmulateOptions& o) {
     using namespace ballbar;
     using ballbar::app::CliError;
     if (o.pty == (o.tcp_port >= 0)) throw CliError(app::kExitUsage, "give exactly one of --pty and --tcp PORT");
+    if (!o.link.empty()) {
+        if (!o.pty) throw CliError(app::kExitUsage, "--link is for --pty: it links to the pseudo-terminal");
+        std::error_code ec;
+        const auto st = std::filesystem::symlink_status(o.link, ec);
+        if (!ec && std::filesystem::exists(st))
+            throw CliError(app::kExitUsage, "--link " + o.link +
+                                                ": something is already there; ballbar emulate makes a new link "
+                                                "only and never replaces a file or link it did not make (remove "
+                                                "it, or choose another path)");
+    }
     if (!o.instrument.empty() && o.instrument != "ballbar") {
         if (!o.pty) throw CliError(app::kExitUsage, "--instrument " + o.instrument + " is served on --pty only");
+        if (!o.link.empty()) throw CliError(app::kExitUsage, "--link is for the ball-bar emulator, not a gauge's");
         return app::run_gauge_emulate(o.instrument, o.faults, o.seed.value_or(1), o.rate_hz);
     }
     device::EmulatorConfig cfg;

@@ -168,15 +168,38 @@ void EmulatorHost::wait_connected() {
 }
 
 void EmulatorHost::run_pty(const std::function<void(const std::string&)>& on_pty, const std::string& link) {
+    // The link is this host's only while it points where the host made it point: it is never made
+    // over something that exists, and only ever replaced or removed while it still points to the
+    // host's last pty (someone else's file or link at that path is left alone).
+    std::string linked_to;  // the pty the host's link points to; empty: no link of the host's
+    auto still_ours = [&] {
+        std::error_code ec;
+        return !linked_to.empty() && std::filesystem::is_symlink(link, ec) &&
+               std::filesystem::read_symlink(link, ec).string() == linked_to && !ec;
+    };
+    auto drop_link = [&] {
+        std::error_code ec;
+        if (still_ours()) std::filesystem::remove(link, ec);
+        linked_to.clear();
+    };
     while (!stopped()) {
         End end;
         {
             PseudoTerminal pty;
             if (!link.empty()) {
-                std::error_code ec;
-                std::filesystem::remove(link, ec);
-                std::filesystem::create_symlink(pty.path(), link, ec);
-                if (ec) event("cannot create symlink " + link + ": " + ec.message());
+                const bool had = !linked_to.empty();
+                if (had && !still_ours()) {
+                    event("the link " + link + " was changed by someone else: left as it is");
+                    linked_to.clear();
+                } else {
+                    drop_link();
+                    std::error_code ec;
+                    std::filesystem::create_symlink(pty.path(), link, ec);
+                    if (ec)
+                        event("cannot create symlink " + link + ": " + ec.message());
+                    else
+                        linked_to = pty.path();
+                }
             }
             on_pty(pty.path());
             end = serve_fd(pty.master());
@@ -186,6 +209,7 @@ void EmulatorHost::run_pty(const std::function<void(const std::string&)>& on_pty
             wait_connected();
         }
     }
+    if (!link.empty()) drop_link();  // a link to a closed pty would mislead the next user of the path
 }
 
 void EmulatorHost::run_tcp(TcpListener& listener) {

@@ -7,6 +7,7 @@
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -122,4 +123,56 @@ TEST(CliEmulateMonitor, UsageAndDeviceErrors) {
     const auto r = run(std::string(BALLBAR_EXE) + " monitor --device emulator: --seconds 0.3 --json");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_GT(nlohmann::json::parse(r.out).at("samples").get<int>(), 200);
+}
+
+// `--link PATH` makes a new symlink to the pty and removes it when the emulator stops; whatever is
+// already at PATH (a file, someone's link) is refused with exit 2 and left as it was.
+TEST(CliEmulateMonitor, TheLinkIsMadeNewAndNeverOverSomethingElse) {
+    char dir_template[] = "/tmp/ballbar-link-XXXXXX";
+    ASSERT_NE(::mkdtemp(dir_template), nullptr);
+    const std::string dir = dir_template;
+    const std::string link = dir + "/bar";
+    {
+        Child emu({BALLBAR_EXE, "emulate", "--pty", "--seed", "7", "--link", link});
+        const std::string path = emu.line(5000);
+        ASSERT_EQ(path.rfind("/dev/pts/", 0), 0u) << path;
+        std::array<char, 256> target{};
+        const ssize_t n = ::readlink(link.c_str(), target.data(), target.size() - 1);
+        ASSERT_GT(n, 0);
+        EXPECT_EQ(std::string(target.data(), static_cast<std::size_t>(n)), path);
+        const auto r = run(std::string(BALLBAR_EXE) + " monitor --device serial:" + link + " --seconds 0.3 --json");
+        EXPECT_EQ(r.code, 0) << r.out;
+    }  // SIGTERM: the emulator stops and takes its link with it
+    EXPECT_NE(::access(link.c_str(), F_OK), 0);
+    struct stat st {};
+    EXPECT_NE(::lstat(link.c_str(), &st), 0) << "the link to a closed pty is left behind";
+
+    // A file there: refused, named, and untouched.
+    {
+        FILE* f = std::fopen(link.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs("not the emulator's\n", f);
+        std::fclose(f);
+    }
+    const auto refused = run(std::string(BALLBAR_EXE) + " emulate --pty --link " + link + " 2>&1");
+    EXPECT_EQ(refused.code, 2) << refused.out;
+    EXPECT_NE(refused.out.find(link), std::string::npos) << refused.out;
+    {
+        FILE* f = std::fopen(link.c_str(), "r");
+        ASSERT_NE(f, nullptr);
+        std::array<char, 64> buf{};
+        const std::size_t got = std::fread(buf.data(), 1, buf.size(), f);
+        std::fclose(f);
+        EXPECT_EQ(std::string(buf.data(), got), "not the emulator's\n");
+    }
+    // Someone's dangling link: refused too.
+    ::unlink(link.c_str());
+    ASSERT_EQ(::symlink("/dev/pts/someone-elses", link.c_str()), 0);
+    EXPECT_EQ(run(std::string(BALLBAR_EXE) + " emulate --pty --link " + link + " 2>&1").code, 2);
+    std::array<char, 256> target{};
+    const ssize_t n = ::readlink(link.c_str(), target.data(), target.size() - 1);
+    ASSERT_GT(n, 0);
+    EXPECT_EQ(std::string(target.data(), static_cast<std::size_t>(n)), "/dev/pts/someone-elses");
+    ::unlink(link.c_str());
+    ::rmdir(dir.c_str());
 }
