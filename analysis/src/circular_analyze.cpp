@@ -100,6 +100,7 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
             p.y_um = (samples[i].measured_mm - test.radius_mm) * 1e3;
             p.travelled = omega * (p.t - feed->command_end_s);
             p.theta = spec.start_deg * kDeg + dir * p.travelled;
+            p.cos_theta = std::cos(p.theta), p.sin_theta = std::sin(p.theta);
             p.dir = dir;
             p.run = static_cast<int>(k);
             lo = i == run.first_sample ? p.y_um : std::min(lo, p.y_um);
@@ -146,6 +147,7 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
     }
     detail::FitOutput fit = detail::fit_diagnostics(in, options);
     const double lag_phase = std::atan(omega * fit.lag_mean_s);
+    const double cos_lag = std::cos(lag_phase), sin_lag = std::sin(lag_phase);
     // All the points again, in time order (the fit's and the guarded, merged), each angle's cosine and
     // sine once; the runs follow one another in time.
     std::vector<AnglePoint> all;
@@ -158,8 +160,9 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
             const bool from_fit = b == guarded.size() || (a < in.points.size() && in.points[a].t < guarded[b].t);
             const detail::FitPoint& p = from_fit ? in.points[a++] : guarded[b++];
             while (run < p.run) run_begin[static_cast<std::size_t>(++run)] = all.size();
-            const double th = p.theta - p.dir * lag_phase;
-            all.push_back({p.y_um, std::cos(th), std::sin(th)});
+            // cos and sin of θ − dir·φ from θ's and φ's (angle addition).
+            all.push_back({p.y_um, p.cos_theta * cos_lag + p.dir * p.sin_theta * sin_lag,
+                           p.sin_theta * cos_lag - p.dir * p.cos_theta * sin_lag});
         }
         while (run < static_cast<int>(result.runs.size())) run_begin[static_cast<std::size_t>(++run)] = all.size();
     }

@@ -119,11 +119,6 @@ double spike_value(double angle, int dir, double start, double omega) {
 class Model {
   public:
     Model(const FitInput& in) : in_(in), r_(in.test.radius_mm), w_(in.omega_rad_s) {
-        cos_.reserve(in.points.size()), sin_.reserve(in.points.size());
-        for (const auto& p : in.points) {  // cos and sin of one angle side by side: one sincos call
-            const double c = std::cos(p.theta), s = std::sin(p.theta);
-            cos_.push_back(c), sin_.push_back(s);
-        }
         double lo = in.points.front().t, hi = lo;
         for (const auto& p : in.points) lo = std::min(lo, p.t), hi = std::max(hi, p.t);
         t_mid_ = 0.5 * (lo + hi);
@@ -199,8 +194,7 @@ class Model {
             const FitPoint* pts = in_.points.data() + b0;
             for (Eigen::Index j = 0; j < len; ++j) {
                 const FitPoint& pt = pts[j];
-                const auto i = static_cast<std::size_t>(b0 + j);
-                const double c0 = cos_[i], s0 = sin_[i];
+                const double c0 = pt.cos_theta, s0 = pt.sin_theta;
                 const int dir = pt.dir;
                 // cos and sin of θ − dir·φ for the mean lag and for each axis's own.
                 ca[j] = c0 * cm + dir * s0 * sm, sa[j] = s0 * cm - dir * c0 * sm;
@@ -340,7 +334,6 @@ class Model {
   private:
     const FitInput& in_;
     double r_, w_, t_mid_ = 0.0, path_mm_ = 0.0;
-    std::vector<double> cos_, sin_;
 };
 
 /// The normal equations of a design: XᵀX (whole, not only a triangle) and Xᵀy.

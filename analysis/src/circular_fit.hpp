@@ -12,6 +12,8 @@ struct FitPoint {
     double t = 0.0;          ///< trace time, s
     double y_um = 0.0;       ///< measured − programmed radius
     double theta = 0.0;      ///< commanded angle, rad (from +p towards +q)
+    double cos_theta = 1.0;  ///< cos θ and sin θ, computed once for the fit and G
+    double sin_theta = 0.0;
     double travelled = 0.0;  ///< commanded angle travelled since the run's arc began, rad (≥ 0)
     int dir = 1;             ///< +1 ccw, −1 cw
     int run = 0;
