@@ -317,14 +317,24 @@ class Model {
         }
     }
 
-    double axis_position(const FitPoint& pt, const State& st, int axis) const {
+    /// The lag phase of an axis (its own lag) and of the mean lag: cos and sin, for the two below.
+    struct AxisPhase {
+        double c_axis, s_axis, c_mean, s_mean;
+    };
+    AxisPhase axis_phase(const State& st, int axis) const {
         const double tau = std::max(st.tau_mean_s + (axis == 0 ? 0.5e-3 : -0.5e-3) * st.dtau_ms, 0.0);
-        const double th = pt.theta - pt.dir * std::atan(w_ * tau);
-        return axis == 0 ? r_ * std::cos(th) : r_ * std::sin(th);
+        const double ph = std::atan(w_ * tau), pm = std::atan(w_ * st.tau_mean_s);
+        return {std::cos(ph), std::sin(ph), std::cos(pm), std::sin(pm)};
     }
-    double radial_factor(const FitPoint& pt, const State& st, int axis) const {
-        const double th = pt.theta - pt.dir * std::atan(w_ * st.tau_mean_s);
-        return axis == 0 ? std::cos(th) : std::sin(th);
+    /// The axis's position about the centre (mm), R·cos or R·sin of θ − dir·φ_axis.
+    double axis_position(const FitPoint& pt, const AxisPhase& ph, int axis) const {
+        return axis == 0 ? r_ * (pt.cos_theta * ph.c_axis + pt.dir * pt.sin_theta * ph.s_axis)
+                         : r_ * (pt.sin_theta * ph.c_axis - pt.dir * pt.cos_theta * ph.s_axis);
+    }
+    /// The share of the axis's error in the radius: cos or sin of θ − dir·φ_mean.
+    double radial_factor(const FitPoint& pt, const AxisPhase& ph, int axis) const {
+        return axis == 0 ? pt.cos_theta * ph.c_mean + pt.dir * pt.sin_theta * ph.s_mean
+                         : pt.sin_theta * ph.c_mean - pt.dir * pt.cos_theta * ph.s_mean;
     }
     double radius() const { return r_; }
     /// Axis travel along the data, at most (|dp| ≤ R dθ).
@@ -499,9 +509,10 @@ Peak search_cyclic(const FitInput& in, const Model& model, const State& st, cons
     const double wanted = std::max(2000.0, 6.0 * kmax * model.path_mm());
     const std::size_t stride = std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(n) / wanted));
     std::vector<double> x, w, y;
+    const Model::AxisPhase phase = model.axis_phase(st, axis);
     for (std::size_t i = 0; i < n; i += stride) {
-        x.push_back(model.axis_position(in.points[i], st, axis));
-        w.push_back(model.radial_factor(in.points[i], st, axis));
+        x.push_back(model.axis_position(in.points[i], phase, axis));
+        w.push_back(model.radial_factor(in.points[i], phase, axis));
         y.push_back(resid[static_cast<Eigen::Index>(i)]);
     }
     const std::size_t m = x.size();
