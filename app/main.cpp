@@ -122,6 +122,9 @@ std::optional<std::string> unknown_command(const CLI::App& root, int argc, char*
 /// about half its time (bench/circular). Where the kernel has no huge pages for madvise, madvise
 /// fails and nothing changes.
 void reserve_heap_on_huge_pages(std::size_t bytes) {
+#if defined(__SANITIZE_ADDRESS__)
+    (void)bytes;  // ASan's own allocator: the block would be poisoned (16 MiB of shadow) and quarantined
+#else
     constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
     void* block = std::malloc(bytes);
     if (block == nullptr) return;
@@ -129,6 +132,7 @@ void reserve_heap_on_huge_pages(std::size_t bytes) {
     const std::uintptr_t begin = (at + kHuge - 1) & ~(kHuge - 1), end = (at + bytes) & ~(kHuge - 1);
     if (end > begin) (void)madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
     std::free(block);
+#endif
 }
 #endif
 
