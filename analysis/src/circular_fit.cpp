@@ -352,12 +352,17 @@ struct Normal {
     Eigen::VectorXd b;
 };
 
+/// XᵀX of the design, whole: a symmetric rank update (half the products) made symmetric.
+Eigen::MatrixXd gram(const Design& d) {
+    const Eigen::Index m = d.x().cols();
+    Eigen::MatrixXd g = Eigen::MatrixXd::Zero(m, m);
+    g.selfadjointView<Eigen::Lower>().rankUpdate(d.x().transpose());
+    return g.selfadjointView<Eigen::Lower>();
+}
+
 /// The normal equations of the whole design.
 void normal_full(const Design& d, Normal& ne) {
-    const Eigen::Index m = d.x().cols();
-    ne.a = Eigen::MatrixXd::Zero(m, m);
-    ne.a.selfadjointView<Eigen::Lower>().rankUpdate(d.x().transpose());
-    ne.a = ne.a.selfadjointView<Eigen::Lower>();
+    ne.a = gram(d);
     ne.b = d.x().transpose() * d.y;
 }
 
@@ -412,9 +417,7 @@ struct Separability {
 Separability check_separability(const Design& d, const FitInput& in, const AnalysisOptions& opt) {
     Separability out;
     const Eigen::Index m = d.x().cols();
-    Eigen::MatrixXd g = Eigen::MatrixXd::Zero(m, m);
-    g.selfadjointView<Eigen::Lower>().rankUpdate(d.x().transpose());
-    g = g.selfadjointView<Eigen::Lower>();
+    Eigen::MatrixXd g = gram(d);
     const Eigen::VectorXd nrm = g.diagonal().cwiseSqrt().cwiseMax(1e-300);
     for (Eigen::Index i = 0; i < m; ++i)
         for (Eigen::Index j = 0; j < m; ++j) g(i, j) /= nrm[i] * nrm[j];
