@@ -208,7 +208,7 @@ class Model {
                     // through their lags' amplitude and phase.
                     const double c = lag0.ap * cpx, s = lag0.aq * sqx;
                     const double norm = std::sqrt(c * c + s * s);
-                    if (servo)
+                    if (servo && norm > 0.0)  // 0 only for a lag beyond any machine's (ωτ > 1e150)
                         servo_col[j] = servo_scale *
                                        (c * (dir * s0 - 2.0 * u * c) * ku + s * (dir * c0 + 2.0 * v * s) * kv) / norm;
                     if (with_y) d.y[b0 + j] = pt.y_um - (1e3 * r_ * (norm - 1.0) - servo_col[j] * st.dtau_ms);
