@@ -115,6 +115,16 @@ std::optional<std::string> unknown_command(const CLI::App& root, int argc, char*
 }
 
 #if defined(__GLIBC__)
+// AddressSanitizer's own allocator would poison the block (16 MiB of shadow) and quarantine it (below):
+// GCC says so with __SANITIZE_ADDRESS__, clang (14) with __has_feature only.
+#if defined(__SANITIZE_ADDRESS__)
+#define BALLBAR_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define BALLBAR_ASAN 1
+#endif
+#endif
+
 /// Grows the heap by `bytes` of address space (nothing is touched) and asks the kernel to back the
 /// part aligned to 2 MiB with transparent huge pages, then frees it to the heap's top, where the next
 /// large buffers are carved from. A 4 KiB page costs a fault each time a buffer first touches it, and
@@ -122,9 +132,12 @@ std::optional<std::string> unknown_command(const CLI::App& root, int argc, char*
 /// about half its time (bench/circular). Where the kernel has no huge pages for madvise, madvise
 /// fails and nothing changes.
 void reserve_heap_on_huge_pages(std::size_t bytes) {
-#if defined(__SANITIZE_ADDRESS__)
-    (void)bytes;  // ASan's own allocator: the block would be poisoned (16 MiB of shadow) and quarantined
+#if defined(BALLBAR_ASAN)
+    (void)bytes;
 #else
+    static bool done = false;  // once a process (the CLI fuzzer calls the command line again and again)
+    if (done) return;
+    done = true;
     constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
     void* block = std::malloc(bytes);
     if (block == nullptr) return;
