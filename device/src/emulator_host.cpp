@@ -187,19 +187,15 @@ void EmulatorHost::run_pty(const std::function<void(const std::string&)>& on_pty
         {
             PseudoTerminal pty;
             if (!link.empty()) {
-                const bool had = !linked_to.empty();
-                if (had && !still_ours()) {
+                if (!linked_to.empty() && !still_ours())
                     event("the link " + link + " was changed by someone else: left as it is");
-                    linked_to.clear();
-                } else {
-                    drop_link();
-                    std::error_code ec;
-                    std::filesystem::create_symlink(pty.path(), link, ec);
-                    if (ec)
-                        event("cannot create symlink " + link + ": " + ec.message());
-                    else
-                        linked_to = pty.path();
-                }
+                drop_link();  // ours only; what else is there makes the new link fail, below
+                std::error_code ec;
+                std::filesystem::create_symlink(pty.path(), link, ec);
+                if (ec)
+                    event("cannot create symlink " + link + ": " + ec.message());
+                else
+                    linked_to = pty.path();
             }
             on_pty(pty.path());
             end = serve_fd(pty.master());
