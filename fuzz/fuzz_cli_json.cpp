@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // libFuzzer target: the JSON inputs the `ballbar` commands themselves read — `solve ssm`, `solve
 // orientation` and `solve compensate` requests, the model (`compensate --model FILE`) and the offsets
-// table (`compensate --offsets FILE`) — through the real command line (app/main.cpp is compiled in as
-// ballbar_cli_main). The first byte picks the input; the rest is the file. Properties: the command ends
+// table (`compensate --offsets FILE`) — through the real command line (app/'s objects are linked in: it calls
+// ballbar::app::cli_main). The first byte picks the input; the rest is the file. Properties: the command ends
 // with exit 0, 1 or 2 (no crash, no uncaught exception), and a refusal names the problem in our words,
 // never with a JSON library's type or range error ("[json.exception.type_error…": a value used unchecked).
 #include <unistd.h>
@@ -17,9 +17,8 @@
 #include <string_view>
 #include <vector>
 
+#include "cli_main.hpp"
 #include "fuzz_check.hpp"
-
-int ballbar_cli_main(int argc, char** argv);
 
 using ballbar::fuzz::check;
 
@@ -44,7 +43,7 @@ int run(std::vector<std::string> args) {
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
-    return ballbar_cli_main(static_cast<int>(args.size()), argv.data());
+    return ballbar::app::cli_main(static_cast<int>(args.size()), argv.data());
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "ballbar/version.hpp"
+#include "cli_main.hpp"
 #include "command.hpp"
 #include "files.hpp"
 
@@ -152,7 +153,7 @@ void reserve_heap_on_huge_pages(std::size_t bytes) {
 }  // namespace
 }  // namespace ballbar::app
 
-int main(int argc, char** argv) {
+int ballbar::app::cli_main(int argc, char** argv) {
     using namespace ballbar::app;
 #if defined(__GLIBC__)
     // An analysis asks for large buffers (10⁵ samples: a 10 MB design matrix, an FFT's buffers) and
