@@ -8,6 +8,9 @@
 # Extra libFuzzer flags can be given in FUZZ_FLAGS (e.g. FUZZ_FLAGS=-jobs=2); FUZZ_TARGETS="a b" runs only
 # those targets and builds only them. FUZZ_RUNS=N stops each target after N inputs (SECONDS stays a cap):
 # with a fixed -seed that is the same inputs on a fast or a slow machine, where a time limit is not.
+# FUZZ_BUILD_DIR=DIR uses the targets of a tree already configured with BALLBAR_FUZZ=ON instead of the
+# fuzz preset's build-fuzz/: CI gives build-asan/, whose `asan` preset builds them along with the tests,
+# so that CI compiles the project with clang once, not twice.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-600}
@@ -22,19 +25,26 @@ targets=(fuzz_decoder)
 for dir in fuzz/corpus/*/; do targets+=("$(basename "$dir")"); done
 if [ -n "${FUZZ_TARGETS:-}" ]; then read -r -a targets <<<"$FUZZ_TARGETS"; fi
 
-cmake --preset fuzz >/dev/null
-if [ -n "${FUZZ_TARGETS:-}" ]; then
-  cmake --build build-fuzz -j2 --target "${targets[@]}"
-else
-  cmake --build --preset fuzz
+build=${FUZZ_BUILD_DIR:-build-fuzz}
+if [ -z "${FUZZ_BUILD_DIR:-}" ]; then
+  cmake --preset fuzz >/dev/null
+elif ! grep -q '^BALLBAR_FUZZ:BOOL=ON' "$build/CMakeCache.txt" 2>/dev/null; then
+  echo "FUZZ_BUILD_DIR=$build is not a tree configured with BALLBAR_FUZZ=ON (e.g. cmake --preset asan)" >&2
+  exit 2
 fi
+if [ -n "${FUZZ_TARGETS:-}" ]; then
+  cmake --build "$build" -j2 --target "${targets[@]}"
+else
+  cmake --build "$build" -j2 --target fuzzers
+fi
+build=$(cd "$build" && pwd)
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/ballbar-fuzz.XXXXXX")
 printf '%-22s %10s %9s %7s %7s\n' target runs execs/s edges corpus
 status=0
 for t in "${targets[@]}"; do
-  exe=build-fuzz/fuzz/$t
-  [ "$t" = fuzz_decoder ] && exe=build-fuzz/device/fuzz/fuzz_decoder
+  exe=$build/fuzz/$t
+  [ "$t" = fuzz_decoder ] && exe=$build/device/fuzz/fuzz_decoder
   seeds=fuzz/corpus/$t
   [ "$t" = fuzz_decoder ] && seeds=device/fuzz/corpus
   corpus=$work/$t
@@ -42,7 +52,7 @@ for t in "${targets[@]}"; do
   if [ -d "$seeds" ]; then cp "$seeds"/* "$corpus"/; fi
   log=$work/$t.log
   # -rss_limit_mb: far above any parser's needs; -max_len: inputs up to 64 KiB (files, programs).
-  if ! (cd "$work" && "$OLDPWD/$exe" -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 \
+  if ! (cd "$work" && "$exe" -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 \
         -print_final_stats=1 $runs_flag ${FUZZ_FLAGS:-} "$corpus" >"$log" 2>&1); then
     echo "$t: FOUND A PROBLEM (log: $log)" >&2
     tail -n 40 "$log" >&2
