@@ -3,4 +3,6 @@
 // CLI fuzzer links as well (fuzz/CMakeLists.txt).
 #include "cli_main.hpp"
 
-int main(int argc, char** argv) { return ballbar::app::cli_main(argc, argv); }
+int main(int argc, char** argv) {
+    return ballbar::app::cli_main(argc, argv);
+}
