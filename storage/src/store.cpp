@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -234,33 +235,43 @@ void Store::check_file(const std::string& path) const {
         throw StorageError(Kind::corrupt, "the database " + path + " is a directory");
     if (!ec && !std::filesystem::is_regular_file(status))  // a FIFO or /dev/zero would block or never end
         throw StorageError(Kind::corrupt, "the database " + path + " is not a regular file; not changed");
-    const auto size = std::filesystem::file_size(path, ec);
+    auto size = std::filesystem::file_size(path, ec);
     if (ec) throw StorageError(Kind::sqlite, "cannot read " + path + ": " + ec.message());
     if (size == 0) return;  // an empty file is a new database
     if (size < 100) {
         throw StorageError(Kind::corrupt,
                            path + " is not a ballbar database (only " + std::to_string(size) + " bytes); not changed");
     }
-    std::array<unsigned char, 100> header{};
-    std::ifstream in(path, std::ios::binary);
-    in.read(reinterpret_cast<char*>(header.data()), header.size());
-    if (!in) throw StorageError(Kind::sqlite, "cannot read " + path);
-    if (std::string_view(reinterpret_cast<const char*>(header.data()), 16) !=
-        std::string_view("SQLite format 3\0", 16)) {
-        throw StorageError(Kind::corrupt, path + " is not an SQLite database (bad header); not changed");
+    // Another process may be checkpointing this very file (many first opens at once): it writes the
+    // header's new page count before the pages it counts, and removes the WAL after. So the WAL is
+    // looked at first and the size last, and a file that looks truncated is looked at again: a
+    // truncated file stays so, a file being written does not.
+    std::uint64_t expected = 0;
+    for (int look = 0; look < 5; ++look) {
+        if (look > 0) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        const auto wal_size = std::filesystem::file_size(path + "-wal", ec);
+        const bool wal_pending = !ec && wal_size > 0;
+        std::array<unsigned char, 100> header{};
+        std::ifstream in(path, std::ios::binary);
+        in.read(reinterpret_cast<char*>(header.data()), header.size());
+        if (!in) throw StorageError(Kind::sqlite, "cannot read " + path);
+        if (std::string_view(reinterpret_cast<const char*>(header.data()), 16) !=
+            std::string_view("SQLite format 3\0", 16)) {
+            throw StorageError(Kind::corrupt, path + " is not an SQLite database (bad header); not changed");
+        }
+        std::uint32_t page_size = (std::uint32_t{header[16]} << 8) | header[17];
+        if (page_size == 1) page_size = 65536;
+        const std::uint32_t pages = be32(&header[28]);
+        const bool size_valid = be32(&header[92]) == be32(&header[24]);
+        const auto now = std::filesystem::file_size(path, ec);
+        if (ec) throw StorageError(Kind::sqlite, "cannot read " + path + ": " + ec.message());
+        expected = std::uint64_t{pages} * page_size;
+        // A crash during a checkpoint can leave the header ahead of the file; the WAL then still holds the pages.
+        if (!size_valid || wal_pending || expected <= now) return;
+        size = now;
     }
-    std::uint32_t page_size = (std::uint32_t{header[16]} << 8) | header[17];
-    if (page_size == 1) page_size = 65536;
-    const std::uint32_t pages = be32(&header[28]);
-    const bool size_valid = be32(&header[92]) == be32(&header[24]);
-    // A crash during a checkpoint can leave the header ahead of the file; the WAL then still holds the pages.
-    const auto wal_size = std::filesystem::file_size(path + "-wal", ec);
-    const bool wal_pending = !ec && wal_size > 0;
-    if (size_valid && !wal_pending && std::uint64_t{pages} * page_size > size) {
-        throw StorageError(Kind::corrupt, path + " is truncated (" + std::to_string(size) + " of " +
-                                              std::to_string(std::uint64_t{pages} * page_size) +
-                                              " bytes); not changed");
-    }
+    throw StorageError(Kind::corrupt, path + " is truncated (" + std::to_string(size) + " of " +
+                                          std::to_string(expected) + " bytes); not changed");
 }
 
 void Store::migrate() {
