@@ -18,7 +18,10 @@ endif()
 # libFuzzer targets (fuzz/, the `fuzz` preset): every library of ours gets the fuzzer's coverage
 # instrumentation and the sanitizers, so the targets see the edges of the parsers they call. The
 # targets themselves add -fsanitize=fuzzer at link time (libFuzzer's main).
-if(BALLBAR_FUZZ)
+# With BALLBAR_SANITIZE too (the `asan` preset), the sanitizers are already on: only the coverage is added.
+if(BALLBAR_FUZZ AND BALLBAR_SANITIZE)
+  add_compile_options(-fsanitize=fuzzer-no-link)
+elseif(BALLBAR_FUZZ)
   add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
                       -fno-omit-frame-pointer)
   add_link_options(-fsanitize=address,undefined)

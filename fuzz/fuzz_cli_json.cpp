@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
 // libFuzzer target: the JSON inputs the `ballbar` commands themselves read — `solve ssm`, `solve
 // orientation` and `solve compensate` requests, the model (`compensate --model FILE`) and the offsets
-// table (`compensate --offsets FILE`) — through the real command line (app/'s objects are linked in: it calls
-// ballbar::app::cli_main). The first byte picks the input; the rest is the file. Properties: the command ends
-// with exit 0, 1 or 2 (no crash, no uncaught exception), and a refusal names the problem in our words,
+// table (`compensate --offsets FILE`) — through the real command line, ballbar::app::cli_main (app/'s
+// objects are linked in). The first byte picks the input; the rest is the file. Properties: the command
+// ends with exit 0, 1 or 2 (no crash, no uncaught exception), and a refusal names the problem in our words,
 // never with a JSON library's type or range error ("[json.exception.type_error…": a value used unchecked).
 #include <unistd.h>
 
