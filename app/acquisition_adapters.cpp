@@ -2,6 +2,7 @@
 #include "acquisition_adapters.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -35,7 +36,16 @@ acq::InstrumentStatus DeviceSource::open_and_identify() {
     }
     info_ = info;
     if (on_identified) on_identified(*info_);
-    const device::InstrumentStatus st = inst_->status();
+    device::InstrumentStatus st = inst_->status();
+    if (st.streaming) {
+        // A host that died without stopping the stream (kill -9 of `measure`, a pulled cable) left it
+        // running: the instrument refuses Configure while it streams, so take over as `monitor` does.
+        inst_->stop_streaming();
+        std::array<analysis::BarSample, 256> stale;  // the other host's samples: not this session's
+        while (inst_->read_samples(stale) > 0) {
+        }
+        st = inst_->status();
+    }
     acq::InstrumentStatus s;
     s.description =
         info_->model + " " + info_->serial + " (firmware " + info_->firmware + ") on " + inst_->transport().uri();

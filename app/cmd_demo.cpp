@@ -63,11 +63,14 @@ struct DemoOptions {
 /// start at every program stop and moves the socket when the stop says so.
 class DemoOperator : public acq::ScriptedOperator {
   public:
-    DemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, bool show_progress,
+    /// `show_progress`: the running count on a terminal; `talk`: the procedure's messages on stderr (what
+    /// it waits for, and how long: a demo on a silent link must not be silent itself).
+    DemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, bool show_progress, bool talk,
                  const device::FaultConfig& faults)
         : acq::ScriptedOperator(plan.spec.answers),
           machine_(machine),
           show_(show_progress),
+          talk_(talk),
           start_delay_s_(faults.start_delay_s),
           feed_override_(faults.feed_override),
           answer_delay_s_(faults.answer_delay_s) {}
@@ -90,7 +93,7 @@ class DemoOperator : public acq::ScriptedOperator {
         std::fflush(stderr);
     }
     void message(std::string_view text) override {
-        if (show_) std::fprintf(stderr, "\r  %.*s\n", static_cast<int>(text.size()), text.data());
+        if (talk_) std::fprintf(stderr, "%s  %.*s\n", show_ ? "\r" : "", static_cast<int>(text.size()), text.data());
     }
     ~DemoOperator() override {
         if (show_) std::fputc('\n', stderr);
@@ -99,7 +102,7 @@ class DemoOperator : public acq::ScriptedOperator {
 
   private:
     device::SimulatedMachine& machine_;
-    bool show_;
+    bool show_, talk_;
     double start_delay_s_, feed_override_, answer_delay_s_;
     std::size_t last_done_ = static_cast<std::size_t>(-1);
 };
@@ -286,13 +289,23 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
                   << " two-step tests, " << plan.points.size() << " points; emulator on " << emulator.path() << "\n";
     DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
     StoreSink sink(store, id, plan);
-    DemoOperator op(plan, emulator.emulator().machine(), show, cfg.faults);
+    DemoOperator op(plan, emulator.emulator().machine(), show, !o.json, cfg.faults);
     acq::Session session(plan, source, sink, op);
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);
-    if (sum.final_state != acq::State::Done)
+    if (sum.final_state != acq::State::Done) {
+        // The points it did store are checked against the truth all the same: an unfinished session
+        // must not hide a wrong point either. Its end is told as stored (interrupted, aborted, failed).
+        emulator.halt();
+        const TruthCheck tc = check_against_truth(store, id, emulator.emulator());
+        std::string truth = "; its " + std::to_string(tc.points) + " stored points checked against the truth: ";
+        truth += tc.wrong_pose == 0
+                     ? "all at their pose"
+                     : std::to_string(tc.wrong_pose) + " away from their pose (first: " + tc.first_wrong + ")";
         throw CliError(kExitFailure, "demo session " + std::to_string(id) + " ended " +
-                                         std::string(acq::to_string(sum.final_state)) + ": " + sum.reason);
+                                         std::string(storage::to_string(store.session(id).state)) + ": " + sum.reason +
+                                         truth);
+    }
 
     // Compare with the truth.
     const auto truth = acq::true_values(plan, cfg.machine.errors);
@@ -452,7 +465,7 @@ BALLBAR_COMMAND(demo) {
     sub->add_option("--instrument", o->instrument, "ballbar (default) or a digital gauge on the bar")
         ->check(CLI::IsMember({"ballbar", "sylvac", "mitutoyo-itn", "digimatic", "modbus"}));
     sub->add_option("--rate", o->gauge_rate_hz, "The gauge's readings per second (--instrument)")
-        ->check(CLI::Range(5.0, 1000.0));
+        ->check(in_range(5, 1000, "readings/s"));
     sub->add_option("--plan", o->plan, "Plan file (ballbar-plan/1) instead of the default four tests at one socket");
     sub->add_option("--faults", o->faults,
                     "Emulator faults (its \"faults\" object, docs/emulator.md): inline JSON or a file");
@@ -460,7 +473,7 @@ BALLBAR_COMMAND(demo) {
         ->check(CLI::IsMember({"ssm", "circular"}));
     sub->add_option("--plane", o->plane, "--test circular: XY, YZ or ZX")->check(CLI::IsMember({"XY", "YZ", "ZX"}));
     sub->add_option("--arc", o->arc_deg, "--test circular: data arc, degrees (default 360 in XY, 180 in YZ and ZX)")
-        ->check(CLI::Range(30.0, 360.0));
+        ->check(in_range(30, 360, "°"));
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });
 }
 

@@ -255,7 +255,7 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         record_instrument(store, id, info);
         const std::string mismatch = acq::bar_length_mismatch(plan.spec.bar_length_mm, info.calibrated_length_mm,
                                                               plan.spec.capture.tolerance_mm, o.plan_file);
-        if (!mismatch.empty()) throw acq::SourceError(mismatch);
+        if (!mismatch.empty()) throw acq::InstrumentUnfit(mismatch);
     };
     StoreSink sink(store, id, plan);
     const InterruptGuard interrupt;  // Ctrl-C: stop, store, stay resumable, exit 3
@@ -321,7 +321,8 @@ BALLBAR_COMMAND(measure) {
     sub->add_option("--resume", o->resume, "Continue an interrupted session (id or uuid prefix)");
     sub->add_option("--program", o->program_file, "Where to write the NC program (default ballbar-session-ID.nc)");
     sub->add_flag("--dry-run", o->dry_run, "Check the plan and write the NC program (stdout or --program) only");
-    sub->add_option("--from-point", o->from_point, "With --dry-run: the program from this point (0-based) on");
+    sub->add_option("--from-point", o->from_point, "With --dry-run: the program from this point (0-based) on")
+        ->check(in_range(0, 1e6));
     sub->add_flag("--non-interactive", o->non_interactive, "Take every answer from the plan file");
     sub->add_flag("--json", o->json, "Events as JSON lines on stdout (answers from stdin, or the plan's)");
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_measure(*o, globals); }; });

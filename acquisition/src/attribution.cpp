@@ -55,6 +55,7 @@ AttributionEvent DwellAttributor::void_measurement(const std::string& why) {
     ev.point = measuring_;
     ev.evidence = measuring_evidence_ + "; dwell void: " + why;
     measuring_.reset();
+    held_.reset();
     detector_.reset(true);
     return ev;
 }
@@ -140,8 +141,10 @@ AttributionEvent DwellAttributor::push(const analysis::BarSample& s) {
     }
     bool started = false;
     if (still && in_plateau_ &&
-        std::abs(mean - level_sum_ / static_cast<double>(level_n_)) > settings_.plateau_level_mm)
+        std::abs(mean - level_sum_ / static_cast<double>(level_n_)) > settings_.plateau_level_mm) {
         close_plateau();
+        if (held_) return void_measurement("the bar's level changed after the window (the machine moved)");
+    }
     if (still) {
         if (!in_plateau_) {
             in_plateau_ = true;
@@ -156,6 +159,9 @@ AttributionEvent DwellAttributor::push(const analysis::BarSample& s) {
     } else if (in_plateau_) {
         const bool was_measuring = measuring_.has_value();
         close_plateau();
+        if (was_measuring && held_)
+            return void_measurement("the machine moved within " + seconds(t - held_->last_time_us) +
+                                    " of the window's end (the window may hold the start of the move)");
         if (was_measuring) return void_measurement("the machine moved before the window was averaged");
     }
 
@@ -183,6 +189,7 @@ AttributionEvent DwellAttributor::push(const analysis::BarSample& s) {
                                        : " fails its check digit");
             } else {
                 measuring_ = point;
+                measuring_start_us_ = plateau_start_us_;
                 measuring_evidence_ = "code " + digits_text() + " read from " + seconds(code_start_us_) + " to " +
                                       seconds(plateau_start_us_);
                 detector_.reset(true);
@@ -195,16 +202,26 @@ AttributionEvent DwellAttributor::push(const analysis::BarSample& s) {
         digits_.clear();
         tags_.clear();
     }
-    if (measuring_) {
-        const DwellDetector::Result r = detector_.push(s);
-        if (r == DwellDetector::Result::Captured) {
-            ev.kind = AttributionEvent::Kind::Captured;
-            ev.point = measuring_;
-            ev.stats = detector_.stats();
-            ev.evidence = measuring_evidence_ + "; window " + seconds(ev.stats.first_time_us) + " to " +
-                          seconds(ev.stats.last_time_us);
-            measuring_.reset();
-        }
+    const auto confirm_us = static_cast<std::uint64_t>(std::llround(settings_.confirm_s * 1e6));
+    if (measuring_ && !held_ && detector_.push(s) == DwellDetector::Result::Captured) {
+        held_ = detector_.stats();
+        // The program's timing: the machine leaves when the G4 ends, seen in the bar or not.
+        const auto dwell_us = static_cast<std::uint64_t>(std::llround(settings_.measuring_dwell_s * 1e6));
+        if (dwell_us > 0 && held_->last_time_us + confirm_us > measuring_start_us_ + dwell_us)
+            return void_measurement("the window ends " + seconds(held_->last_time_us - measuring_start_us_) +
+                                    " into a dwell of " + seconds(dwell_us) +
+                                    ", too close to its end (the machine leaves when its G4 ends)");
+    }
+    if (measuring_ && held_ && t >= held_->last_time_us + confirm_us) {
+        // Still at the same level for confirm_s after the window (no gap, no move): the evidence holds.
+        ev.kind = AttributionEvent::Kind::Captured;
+        ev.point = measuring_;
+        ev.stats = *held_;
+        ev.evidence = measuring_evidence_ + "; window " + seconds(ev.stats.first_time_us) + " to " +
+                      seconds(ev.stats.last_time_us) + ", the bar still " + seconds(t - ev.stats.last_time_us) +
+                      " after it";
+        measuring_.reset();
+        held_.reset();
     }
     return ev;
 }

@@ -66,7 +66,9 @@ CircularSession::CircularSession(circ::TestSpec test, SampleSource& source, Circ
                                  CircularOptions options)
     : test_(std::move(test)), source_(source), sink_(sink), op_(op), options_(options) {
     link_ = std::make_unique<detail::InstrumentLink>(
-        source, op, detail::InstrumentLink::Settings{options.read_timeout, options.max_reconnect_attempts},
+        source, op,
+        detail::InstrumentLink::Settings{options.read_timeout, options.max_reconnect_attempts,
+                                         std::chrono::seconds(10)},
         [this] { check_stop(); }, [this](const std::string& reason) { end_interrupted(reason); });
 }
 
@@ -331,8 +333,12 @@ CircularSummary CircularSession::run() {
     try {
         try {
             status_ = source_.connect();
+        } catch (const InstrumentUnfit& e) {
+            end(Event::Fail, std::string("cannot use the instrument: ") + e.what());
         } catch (const SourceError& e) {
-            end(Event::Fail, std::string("cannot open the instrument: ") + e.what());
+            // Nothing was measured in this run: the session stays resumable (interrupted, never failed),
+            // whatever the link did (a busy or absent instrument, another bar answering).
+            end_interrupted(std::string("cannot open the instrument: ") + e.what());
         }
         fire(Event::Connected, status_.description);
         if (options_.fit_feed_in && status_.range_mm) fit_feed_in();

@@ -104,7 +104,12 @@ DwellDetector::Result DwellDetector::push(const BarSample& s) {
         add(x, s);
         temp_sum_ += s.bar_temp_C;
         if (s.flags) flagged_ = true;
-        if (count_ < ring_.size()) return Result::None;
+        const std::size_t w = ring_.size();
+        // The span of a full window: (w − 1) sample periods.
+        const double span_s = settings_.window_s * static_cast<double>(w - 1) / static_cast<double>(w);
+        const bool spans = settings_.window_s > 0 && 2 * count_ >= w && count_ >= 3 &&
+                           1e-6 * static_cast<double>(last_time_ - first_time_) >= span_s;
+        if (count_ < w && !spans) return Result::None;
         compute(stats_);
         clear();
         mode_ = Mode::Searching;

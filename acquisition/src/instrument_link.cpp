@@ -47,8 +47,20 @@ void InstrumentLink::reference() {
 }
 
 void InstrumentLink::wait_for_instrument() {
+    using clock = std::chrono::steady_clock;
+    const auto bound = settings_.read_timeout * settings_.max_reconnect_attempts;
+    const auto start = clock::now();
+    auto next_note = start + settings_.note_every;
+    auto whole_s = [](clock::duration d) {
+        return std::to_string(
+            std::chrono::duration_cast<std::chrono::seconds>(d + std::chrono::milliseconds(500)).count());
+    };
+    op_.message("Waiting for the instrument to answer (at most " + whole_s(bound) +
+                " s; then the session stops, resumable).");
     for (int i = 0;; ++i) {
-        if (i >= settings_.max_reconnect_attempts) fail("the instrument did not come back");
+        const auto waited = clock::now() - start;
+        if (i >= settings_.max_reconnect_attempts || waited >= bound)
+            fail("the instrument did not come back within " + whole_s(waited) + " s");
         check_stop_();
         bool back = false;
         try {
@@ -57,6 +69,11 @@ void InstrumentLink::wait_for_instrument() {
             fail(std::string("the instrument came back unusable: ") + err.what());
         }
         if (back) return;
+        if (const auto now = clock::now(); now >= next_note && now - start < bound) {
+            op_.message("Still no answer from the instrument: " + whole_s(bound - (now - start)) +
+                        " s left before the session stops (resumable).");
+            next_note = now + settings_.note_every;
+        }
     }
 }
 

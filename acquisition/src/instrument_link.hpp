@@ -19,6 +19,8 @@ class InstrumentLink {
     struct Settings {
         std::chrono::milliseconds read_timeout{200};
         int max_reconnect_attempts = 600;  ///< each `read_timeout` long
+        /// How often the operator is told, while waiting for the instrument, how long is left.
+        std::chrono::milliseconds note_every{10000};
     };
     using CheckStop = std::function<void()>;
     using GiveUp = std::function<void(const std::string& reason)>;
@@ -29,7 +31,10 @@ class InstrumentLink {
     /// reference that fails (the link dropped right after it came back) is tried again after getting the
     /// link back, a few times.
     void reference();
-    /// Reconnects until the instrument is back (identified, not streaming).
+    /// Reconnects until the instrument is back (identified, not streaming), for at most
+    /// max_reconnect_attempts × read_timeout of wall time (an instrument that is there but does not
+    /// answer makes each attempt last its own reply timeouts, so the attempts alone bound nothing),
+    /// telling the operator the bound at the start and the time left every `note_every`; then gives up.
     void wait_for_instrument();
     /// Starts the stream unless it runs; a start that fails gets the link back and re-references first.
     /// True when it was started now.

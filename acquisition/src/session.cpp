@@ -42,7 +42,9 @@ Session::Session(const Plan& plan, SampleSource& source, SessionSink& sink, Oper
       best_failed_(plan.points.size()),
       failure_why_(plan.points.size()) {
     link_ = std::make_unique<detail::InstrumentLink>(
-        source, op, detail::InstrumentLink::Settings{options.read_timeout, options.max_reconnect_attempts},
+        source, op,
+        detail::InstrumentLink::Settings{options.read_timeout, options.max_reconnect_attempts,
+                                         std::chrono::seconds(10)},
         [this] { check_stop(); }, [this](const std::string& reason) { end_interrupted(reason); });
 }
 
@@ -104,8 +106,12 @@ SessionSummary Session::run() {
     try {
         try {
             status_ = source_.connect();
+        } catch (const InstrumentUnfit& err) {
+            end(Event::Fail, std::string("cannot use the instrument: ") + err.what());
         } catch (const SourceError& err) {
-            end(Event::Fail, std::string("cannot open the instrument: ") + err.what());
+            // Nothing was measured in this run: the session stays resumable (interrupted, never failed),
+            // whatever the link did (a busy or absent instrument, another bar answering).
+            end_interrupted(std::string("cannot open the instrument: ") + err.what());
         }
         fire(Event::Connected, status_.description);
         check_instrument();
@@ -151,6 +157,8 @@ void Session::check_instrument() {
     as.dwell.still_drift_mm = 4 * plan_.spec.capture.max_drift_mm;
     as.dwell.tolerance_mm = plan_.spec.capture.tolerance_mm;
     as.dwell.calibrated_length_mm = status_.calibrated_length_mm;
+    as.measuring_dwell_s = plan_.spec.dwell_s;
+    as.dwell.window_s = plan_.spec.capture.window_s;
     attribution_settings_ = as;
     attributor_.emplace(as);
     std::vector<double> expected;

@@ -38,7 +38,13 @@ struct CampaignFigures {
     std::string interrupted_reasons;
 };
 
-inline void run_campaign_session(std::uint64_t seed, CampaignFigures& f, std::vector<TransitionRecord>* log = nullptr) {
+/// A fixed link instead of the campaign's random one: these probabilities, no disconnects.
+struct CampaignLink {
+    double drop_frame_probability = 0, replay_frame_probability = 0;
+};
+
+inline void run_campaign_session(std::uint64_t seed, CampaignFigures& f, std::vector<TransitionRecord>* log = nullptr,
+                                 const CampaignLink* link = nullptr) {
     std::mt19937_64 rng(seed);
     auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
     const analysis::MachineType types[] = {analysis::MachineType::RRTTT, analysis::MachineType::TTTRR,
@@ -71,6 +77,11 @@ inline void run_campaign_session(std::uint64_t seed, CampaignFigures& f, std::ve
     const int n_disc = static_cast<int>(rng() % 3);
     for (int i = 0; i < n_disc; ++i) so.disconnects.emplace_back(uni(5, span), uni(0.2, 10));
     std::sort(so.disconnects.begin(), so.disconnects.end());
+    if (link) {
+        so.drop_frame_probability = link->drop_frame_probability;
+        so.replay_frame_probability = link->replay_frame_probability;
+        so.disconnects.clear();
+    }
     SimOperatorOptions oo;
     oo.late_start_s = uni(0, 60);
     oo.feed_override = uni(0.5, 1.5);
@@ -148,9 +159,10 @@ inline void run_campaign_session(std::uint64_t seed, CampaignFigures& f, std::ve
     }
 }
 
-inline CampaignFigures run_campaign(int sessions, std::uint64_t first_seed = 1) {
+inline CampaignFigures run_campaign(int sessions, std::uint64_t first_seed = 1, const CampaignLink* link = nullptr) {
     CampaignFigures f;
-    for (int i = 0; i < sessions; ++i) run_campaign_session(first_seed + static_cast<std::uint64_t>(i), f);
+    for (int i = 0; i < sessions; ++i)
+        run_campaign_session(first_seed + static_cast<std::uint64_t>(i), f, nullptr, link);
     return f;
 }
 

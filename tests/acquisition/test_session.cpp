@@ -7,6 +7,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "ballbar/acquisition/compute.hpp"
 #include "ballbar/acquisition/session.hpp"
@@ -237,6 +241,47 @@ TEST(Session, AMachineThatNeverStartsEndsInterruptedWithEveryPointMissing) {
     // Each program: the standstill allowed after its start, the grace, then the program's own timing.
     EXPECT_LT(source.now_s(), 2 * (so.max_standstill_s + so.start_grace_s + 200))
         << "the waits follow the program's timing";
+}
+
+/// Issue 24: an instrument that stays plugged in but stops answering (the emulator's stall) made
+/// every reconnect attempt last its reply timeouts, so 600 attempts "of 0.2 s" took many minutes in
+/// silence. The wait is bounded in wall time (attempts × read timeout) and told to the operator: the
+/// bound at the start, the time left while it lasts.
+TEST(Session, AnInstrumentThatStopsAnsweringEndsTheWaitInBoundedTimeAndSaysSo) {
+    const Plan plan = tttrr_plan(1);
+    SimOptions opt;
+    opt.referenced = true;
+    class Mute : public SimSource {
+      public:
+        using SimSource::SimSource;
+        void start() override { throw SourceError("no reply to Start"); }
+        bool reconnect(std::chrono::milliseconds) override {
+            ++attempts;
+            std::this_thread::sleep_for(std::chrono::milliseconds(30));  // its reply timeouts
+            return false;
+        }
+        int attempts = 0;
+    } source(setup_for(plan), plan, opt);
+    class Listening : public SimOperator {
+      public:
+        using SimOperator::SimOperator;
+        void message(std::string_view text) override { said.emplace_back(text); }
+        std::vector<std::string> said;
+    } op(&source);
+    RecordingSink sink;
+    SessionOptions so;
+    so.read_timeout = std::chrono::milliseconds(10);
+    so.max_reconnect_attempts = 100;  // bound: 100 × 10 ms = 1 s, where 100 attempts take 3 s
+    Session session(plan, source, sink, op, so);
+    const SessionSummary sum = session.run();
+    EXPECT_TRUE(sum.interrupted);
+    EXPECT_NE(sum.reason.find("did not come back within 1 s"), std::string::npos) << sum.reason;
+    EXPECT_LT(source.attempts, 60) << "the wall-time bound ends the wait, not the attempts";
+    ASSERT_FALSE(op.said.empty());
+    const bool told = std::any_of(op.said.begin(), op.said.end(), [](const std::string& m) {
+        return m.find("Waiting for the instrument to answer (at most 1 s") != std::string::npos;
+    });
+    EXPECT_TRUE(told) << op.said.front();
 }
 
 TEST(Session, KilledSessionResumesWithAProgramForTheMissingPointsOnly) {

@@ -417,4 +417,78 @@ TEST(CliMeasure, CtrlCStoresStopsWithExit3AndResumes) {
     expect_resumes_after_three_points(dir, db, s.session);
 }
 
+/// Issue 24: kill -9 of `measure` leaves a standalone instrument streaming (this one has no watchdog,
+/// the worst case); an immediate `measure --resume` on the same instrument stops the stream, takes
+/// over and completes, where it used to fail with "the instrument refused Configure: busy" and mark
+/// the session failed.
+TEST(CliMeasure, AResumeRightAfterAKillTakesOverTheStreamingInstrument) {
+    const fs::path dir = temp_dir() / "takeover";
+    fs::create_directories(dir);
+    const fs::path db = dir / "takeover.db", prog = dir / "t.nc";
+    fs::remove(db);
+    fs::remove(prog);
+    std::string cfg = slurp(kData / "tttrr-emulator-measure.json");
+    cfg.replace(cfg.find("/tmp/ballbar-session.nc"), 23, prog.string());
+    const fs::path cfg_path = dir / "emulator.json";
+    std::ofstream(cfg_path) << cfg;
+    const std::string exe = BALLBAR_EXE;
+    int emu_out[2];
+    ASSERT_EQ(::pipe(emu_out), 0);
+    const pid_t emu = ::fork();
+    ASSERT_GE(emu, 0);
+    if (emu == 0) {
+        ::dup2(emu_out[1], STDOUT_FILENO);
+        ::close(emu_out[0]);
+        ::execl(exe.c_str(), exe.c_str(), "emulate", "--tcp", "0", "--watchdog", "0", "--config", cfg_path.c_str(),
+                static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    ::close(emu_out[1]);
+    std::string device;
+    for (char c = 0; ::read(emu_out[0], &c, 1) == 1 && c != '\n';) device += c;
+    ASSERT_EQ(device.rfind("tcp:127.0.0.1:", 0), 0u) << device;
+
+    // 1. measure, killed while the instrument streams (after three points).
+    int out[2];
+    ASSERT_EQ(::pipe(out), 0);
+    const std::string machine = (kData / "tttrr.json").string(), plan = (kData / "tttrr-quick.plan.json").string();
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        ::dup2(out[1], STDOUT_FILENO);
+        ::dup2(out[1], STDERR_FILENO);
+        ::close(out[0]);
+        ::execl(exe.c_str(), exe.c_str(), "--db", db.c_str(), "measure", "--non-interactive", "--device",
+                device.c_str(), "--machine", machine.c_str(), "--plan", plan.c_str(), "--program", prog.c_str(),
+                static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    ::close(out[1]);
+    std::string first;
+    std::array<char, 1024> buf{};
+    while (first.find("captured 3/6") == std::string::npos) {
+        const ssize_t n = ::read(out[0], buf.data(), buf.size());
+        if (n <= 0) break;
+        first.append(buf.data(), static_cast<std::size_t>(n));
+    }
+    ::kill(pid, SIGKILL);
+    int st = 0;
+    ::waitpid(pid, &st, 0);
+    ::close(out[0]);
+    ASSERT_NE(first.find("captured 3/6"), std::string::npos) << first;
+
+    // 2. at once, on the same (still streaming) instrument.
+    std::string second;
+    const int code = run("--db " + db.string() + " measure --non-interactive --device " + device +
+                             " --resume 1 --program " + prog.string(),
+                         &second);
+    ::kill(emu, SIGINT);
+    ::waitpid(emu, &st, 0);
+    ::close(emu_out[0]);
+    EXPECT_EQ(code, 0) << second;
+    EXPECT_EQ(second.find("busy"), std::string::npos) << second;
+    EXPECT_NE(second.find("resumed after 3 points"), std::string::npos) << second;
+    EXPECT_NE(second.find("completed"), std::string::npos) << second;
+}
+
 }  // namespace

@@ -76,7 +76,7 @@ nlohmann::json show_json(const TempDir& dir, const std::string& id) {
 
 }  // namespace
 
-TEST(CliSessions, KilledIsInterruptedFailedShowsWhyAndBothResume) {
+TEST(CliSessions, KilledIsInterruptedAFailedOpenKeepsItSoAndItResumes) {
     TempDir dir;
     SilentPort silent;
     const std::string mute = "tcp:127.0.0.1:" + std::to_string(silent.port);
@@ -107,20 +107,22 @@ TEST(CliSessions, KilledIsInterruptedFailedShowsWhyAndBothResume) {
     EXPECT_EQ(j["session"]["resumable"], true);
     EXPECT_NE(j["session"]["state_reason"].get<std::string>().find("writer is gone"), std::string::npos);
 
-    // 2. resumed on the same silent instrument, it fails: the reason is shown, and it stays resumable.
+    // 2. resumed on the same silent instrument, it cannot open it: the reason is shown, and the session
+    //    stays interrupted and resumable (a failed open never makes it failed: issue 24).
     CliRun r = run(dir, "measure --non-interactive --resume 1 --device " + mute + " --program " + dir.file("r.nc"));
-    EXPECT_NE(r.code, 0);
+    EXPECT_EQ(r.code, 3) << r.out << r.err;
     EXPECT_NE(r.out.find("Session 1 is interrupted: interrupted"), std::string::npos) << r.out;
     const CliRun shown = run(dir, "sessions show 1");
-    EXPECT_NE(shown.out.find("state       failed  (fail: cannot open the instrument"), std::string::npos) << shown.out;
+    EXPECT_NE(shown.out.find("state       interrupted  (interrupted: cannot open the instrument"), std::string::npos)
+        << shown.out;
     EXPECT_NE(shown.out.find("resume      ballbar measure --resume 1"), std::string::npos) << shown.out;
 
-    // 3. the failed session resumes on a working instrument and completes; the reason comes first.
+    // 3. it resumes on a working instrument and completes; the reason comes first.
     const fs::path cfg = emulator_config(dir, 100);
     r = run(dir, "measure --non-interactive --resume 1 --device emulator:" + cfg.string() + " --program " +
                      dir.file("r2.nc"));
     EXPECT_EQ(r.code, 0) << r.out << r.err;
-    EXPECT_EQ(r.out.rfind("Session 1 is failed: fail: cannot open the instrument", 0), 0u) << r.out;
+    EXPECT_EQ(r.out.rfind("Session 1 is interrupted: interrupted: cannot open the instrument", 0), 0u) << r.out;
     EXPECT_NE(r.out.find("completed"), std::string::npos) << r.out;
     j = show_json(dir, "1");
     EXPECT_EQ(j["session"]["state"], "completed");

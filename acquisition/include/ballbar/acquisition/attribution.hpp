@@ -31,6 +31,14 @@ struct AttributionSettings {
     double plateau_level_mm = 0.03;   ///< a plateau's samples stay this close to its level
     double measuring_level_mm = 0.3;  ///< |level − bar length| of a measuring dwell at most this
     DwellSettings dwell;              ///< the averaging of the attributed dwell
+    /// The program's G4 at each measuring point (0: unknown). A window must end this long after its
+    /// dwell began, less `confirm_s`, at the latest: the machine leaves the point when the G4 ends,
+    /// whether or not the bar length shows it (a move across the bar changes its length little).
+    double measuring_dwell_s = 0;
+    /// A window counts only once the bar has stood still at the same level this long after its last
+    /// sample: a move that began within the window shows by then (the plateau detector needs at most
+    /// its own window to see one). Until then the point is held, not captured.
+    double confirm_s = 0.1;
 };
 
 /// What one pushed sample concluded.
@@ -83,6 +91,8 @@ class DwellAttributor {
     std::uint64_t code_start_us_ = 0;
     std::optional<std::size_t> measuring_;
     std::string measuring_evidence_;
+    std::uint64_t measuring_start_us_ = 0;  ///< the measuring dwell's plateau began here
+    std::optional<WindowStats> held_;       ///< averaged, waiting for the stillness after it
     DwellDetector detector_;
     double last_mm_ = 0;
 };

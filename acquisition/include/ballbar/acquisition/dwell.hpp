@@ -17,7 +17,11 @@
 namespace ballbar::acquisition {
 
 struct DwellSettings {
-    std::size_t window = 500;       ///< samples per window
+    std::size_t window = 500;  ///< samples per window
+    /// The window's length in device time (0: by count only). A captured window ends when it holds
+    /// `window` samples or spans this long with at least half of them: frames lost on the link then
+    /// thin the window instead of stretching it towards the end of the dwell (issue 24).
+    double window_s = 0;
     double still_std_mm = 0.008;    ///< "still": standard deviation at most this
     double still_drift_mm = 0.008;  ///< "still": |fitted slope × window| at most this
     double tolerance_mm = 0.5;      ///< |mean − expected| at most this

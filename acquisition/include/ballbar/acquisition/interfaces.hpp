@@ -30,6 +30,14 @@ class SourceError : public std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+/// The instrument answered, but it is not one this session can use (another bar length than the
+/// plan's): the session fails and says how to fix it. Any other SourceError while opening (no answer,
+/// busy, absent) leaves the session interrupted and resumable.
+class InstrumentUnfit : public SourceError {
+  public:
+    using SourceError::SourceError;
+};
+
 struct InstrumentStatus {
     std::string description;  ///< "BB-1E EMU00001 fw 1.0.0"
     double battery_pct = 100;
