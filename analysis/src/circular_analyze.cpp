@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "circular_fit.hpp"
 
@@ -43,6 +44,30 @@ double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
     return hi - lo;
 }
 
+/// Throws when the samples from `from_s` (the feed-in's start) to `to_s` (the data arc's end) have a
+/// step longer than `max_hole_s`: a stretch of the circle without data, or a jump of the clock that
+/// would put every later sample at a wrong angle. The message names the run, the times and the angles.
+void check_holes(std::size_t k, const RunSpec& spec, const std::vector<TraceSample>& samples, double from_s,
+                 double to_s, double command_end_s, double omega, int dir, double max_hole_s) {
+    auto at = std::lower_bound(samples.begin(), samples.end(), from_s,
+                               [](const TraceSample& s, double t) { return s.time_s < t; });
+    if (at != samples.begin()) --at;  // the step into the stretch counts too
+    for (auto p = at; p + 1 != samples.end() && p->time_s < to_s; ++p) {
+        const double gap_s = (p + 1)->time_s - p->time_s;
+        if (gap_s <= max_hole_s) continue;
+        auto angle_deg = [&](double t) {
+            return spec.start_deg + dir * std::max(0.0, omega * (t - command_end_s)) / kDeg;
+        };
+        char text[320];
+        std::snprintf(text, sizeof text,
+                      ": no samples for %.3f s, from t = %.3f s to %.3f s (the commanded angle %.1f° to %.1f°): "
+                      "a hole or a jump of the clock longer than %.3f s leaves angles unmeasured or misplaced; "
+                      "no figures or verdict from this trace: measure the run again",
+                      gap_s, p->time_s, (p + 1)->time_s, angle_deg(p->time_s), angle_deg((p + 1)->time_s), max_hole_s);
+        throw CircularError(run_name(k, spec) + text);
+    }
+}
+
 }  // namespace
 
 const DiagnosticResult* CircularResult::find(Diag diag) const {
@@ -58,6 +83,15 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
     for (std::size_t i = 1; i < samples.size(); ++i)
         if (!(samples[i].time_s > samples[i - 1].time_s))
             throw CircularError("time_s is not strictly increasing at sample " + std::to_string(i + 1));
+
+    // The trace's sample period (the median step) sets what counts as a hole.
+    double max_hole_s = 0.0;
+    {
+        std::vector<double> dt(samples.size() - 1);
+        for (std::size_t i = 1; i < samples.size(); ++i) dt[i - 1] = samples[i].time_s - samples[i - 1].time_s;
+        std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+        max_hole_s = std::max(options.max_hole_s, 3.0 * dt[dt.size() / 2]);
+    }
 
     CircularResult result;
     result.test = test;
@@ -90,6 +124,8 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
                                 " s, before the data arc does (" + std::to_string(run.data_end_s) + " s)");
         const int dir = spec.direction == Direction::Ccw ? 1 : -1;
         (dir > 0 ? ccw : cw) = true;
+        check_holes(k, spec, samples, feed->command_end_s - test.feed_in_mm / speed, run.data_end_s,
+                    feed->command_end_s, omega, dir, max_hole_s);
         std::size_t i = feed->index;
         while (i < samples.size() && samples[i].time_s < run.data_start_s) ++i;
         run.first_sample = i;

@@ -123,6 +123,61 @@ TEST(CircularAnalysis, RefusesATraceThatEndsBeforeTheSecondRun) {
     }
 }
 
+/// Issue 24: removing 2 s of samples, or a jump of the clock, changed G without a word. Now a hole
+/// longer than AnalysisOptions::max_hole_s in a run (feed-in to the end of the data arc) is refused,
+/// naming the run, the times and the commanded angles; a few lost samples are still bridged.
+namespace {
+std::string refusal(const GenSpec& s, const std::vector<circ::TraceSample>& samples) {
+    try {
+        circ::analyze_circular(to_test(s), samples);
+    } catch (const circ::CircularError& e) {
+        return e.what();
+    }
+    return {};
+}
+}  // namespace
+
+TEST(CircularAnalysis, RefusesAHoleOrAClockJumpInARunAndNamesItsAngles) {
+    std::mt19937_64 rng(6);
+    const GenSpec s = base_spec(0, false);
+    const std::vector<circ::TraceSample> whole = to_samples(generate(s, GenEffects{}, rng));
+    const double t0 = 20.0;  // within run 1's data arc (its feed-in ends near 5 s; 9.55°/s)
+    // 1. 2 s of samples removed.
+    std::vector<circ::TraceSample> holed;
+    for (const auto& x : whole)
+        if (x.time_s < t0 || x.time_s >= t0 + 2.0) holed.push_back(x);
+    const std::string hole = refusal(s, holed);
+    EXPECT_NE(hole.find("run 1 (ccw): no samples for 2.00"), std::string::npos) << hole;
+    EXPECT_NE(hole.find("commanded angle"), std::string::npos) << hole;
+    EXPECT_NE(hole.find("measure the run again"), std::string::npos) << hole;
+    // 2. the clock jumps 10 s forward, no sample lost: every later angle would be misplaced.
+    std::vector<circ::TraceSample> jumped = whole;
+    for (auto& x : jumped)
+        if (x.time_s >= t0) x.time_s += 10.0;
+    const std::string jump = refusal(s, jumped);
+    EXPECT_NE(jump.find("run 1 (ccw): no samples for 10.00"), std::string::npos) << jump;
+    // 3. in the second run: named as run 2.
+    const double t1 = whole.back().time_s - 20.0;
+    std::vector<circ::TraceSample> late;
+    for (const auto& x : whole)
+        if (x.time_s < t1 || x.time_s >= t1 + 0.5) late.push_back(x);
+    EXPECT_NE(refusal(s, late).find("run 2 (cw): no samples for 0.50"), std::string::npos) << refusal(s, late);
+    // 4. five lost samples (10 ms at 500 Hz) are bridged, and the figures barely move.
+    std::vector<circ::TraceSample> few;
+    for (std::size_t i = 0; i < whole.size(); ++i)
+        if (whole[i].time_s < t0 || whole[i].time_s >= t0 + 0.010) few.push_back(whole[i]);
+    const circ::CircularResult a = circ::analyze_circular(to_test(s), whole);
+    const circ::CircularResult b = circ::analyze_circular(to_test(s), few);
+    EXPECT_NEAR(a.runs[0].circularity_um, b.runs[0].circularity_um, 0.05);
+    // 5. the same 2 s hole in run 1's closing overshoot (after its data arc, before run 2's feed-in)
+    //    misplaces no angle of either data arc.
+    const double after = a.runs[0].data_end_s + 1.0;
+    std::vector<circ::TraceSample> overshoot;
+    for (const auto& x : whole)
+        if (x.time_s < after || x.time_s >= after + 2.0) overshoot.push_back(x);
+    EXPECT_EQ(refusal(s, overshoot), "");
+}
+
 TEST(CircularAnalysis, RefusesATraceWithoutFeedIn) {
     std::vector<circ::TraceSample> flat;
     for (int i = 0; i < 5000; ++i) flat.push_back({i * 0.002, 100.0});

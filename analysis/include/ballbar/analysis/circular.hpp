@@ -142,6 +142,11 @@ struct AnalysisOptions {
     double min_pitch_mm = 2.0;       ///< cyclic error searched from here to radius / 4
     double min_vibration_hz = 2.0;   ///< vibration searched from here to 0.45 × sample rate
     double min_independence = 0.05;  ///< below this a signature counts as not separable
+    /// The longest time without samples a run may have, from its feed-in to the end of its data arc
+    /// (at least 3 sample periods). A longer hole, or a jump of the clock, leaves angles unmeasured or
+    /// misplaced (every later angle comes from time): the analysis refuses the run and names the hole.
+    /// The same bound as the live session's (acquisition's CircularOptions::max_gap_s).
+    double max_hole_s = 0.050;
 };
 
 /// How coarsely a test may be sampled (docs/circular.md, "Sample spacing"). Samples lie F / (60 · rate)
