@@ -6,6 +6,8 @@
 #endif
 
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -63,6 +65,27 @@ std::string existing_db_path(const Globals& globals) {
     if (!std::filesystem::exists(path, ec))
         throw CliError(kExitUsage, "no database at " + path + (globals.db_path.empty() ? "" : " (check --db)"));
     return path;
+}
+
+CLI::Validator in_range(double lo, double hi, std::string unit, bool lo_open) {
+    auto text = [](double v) {
+        std::ostringstream os;
+        os << v;
+        return os.str();
+    };
+    std::string range = (lo_open ? "(" : "[") + text(lo) + ", " + text(hi) + "]" + (unit.empty() ? "" : " " + unit);
+    return CLI::Validator(
+        [lo, hi, lo_open, range](std::string& value) -> std::string {
+            const char* begin = value.c_str();
+            char* end = nullptr;
+            errno = 0;
+            const double v = std::strtod(begin, &end);
+            if (end == begin || *end != '\0') return "'" + value + "' is not a number";
+            if (!std::isfinite(v) || errno == ERANGE) return value + " is not a finite number";
+            if (v > hi || (lo_open ? !(v > lo) : !(v >= lo))) return value + " is outside " + range;
+            return {};
+        },
+        range);
 }
 
 bool looks_like_session_key(std::string_view arg) {
@@ -171,7 +194,13 @@ int ballbar::app::cli_main(int argc, char** argv) {
 
     Globals globals;
     globals.color = ::isatty(STDOUT_FILENO) && !std::getenv("NO_COLOR");
-    root.add_option("--db", globals.db_path, "SQLite database (default $XDG_DATA_HOME/ballbar/ballbar.db)");
+    root.add_option("--db", globals.db_path, "SQLite database (default $XDG_DATA_HOME/ballbar/ballbar.db)")
+        ->check(CLI::Validator(
+            [](std::string& path) -> std::string {
+                // An empty path is a script's unset variable, not a wish for the default database.
+                return path.empty() ? "an empty path; leave --db out to use the default database" : "";
+            },
+            "PATH"));
 
     auto& entries = registry();
     std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
@@ -179,7 +208,7 @@ int ballbar::app::cli_main(int argc, char** argv) {
     add_help_footers(root);
 
     if (const auto unknown = unknown_command(root, argc, argv)) {
-        std::cerr << "ballbar: error: " << *unknown << '\n';
+        std::cerr << "ballbar: error: " << printable(*unknown) << '\n';
         return kExitUsage;
     }
     try {
@@ -192,19 +221,19 @@ int ballbar::app::cli_main(int argc, char** argv) {
         return root.exit(e);
     } catch (const CLI::ParseError& e) {
         // CLI11's own message, in the one error format, with where to look.
-        std::cerr << "ballbar: error: " << e.what() << "\nRun with --help for more information.\n";
+        std::cerr << "ballbar: error: " << printable(e.what(), true) << "\nRun with --help for more information.\n";
         return kExitUsage;
     }
     try {
         return globals.action ? globals.action() : kExitOk;
     } catch (const CliError& e) {
-        std::cerr << "ballbar: error: " << readable_message(e.what()) << '\n';
+        std::cerr << "ballbar: error: " << printable(readable_message(e.what()), true) << '\n';
         return e.code();
     } catch (const ballbar::fileio::FileError& e) {
-        std::cerr << "ballbar: error: " << readable_message(e.what()) << '\n';
+        std::cerr << "ballbar: error: " << printable(readable_message(e.what()), true) << '\n';
         return cli_error(e).code();
     } catch (const std::exception& e) {
-        std::cerr << "ballbar: error: " << readable_message(e.what()) << '\n';
+        std::cerr << "ballbar: error: " << printable(readable_message(e.what()), true) << '\n';
         return kExitFailure;
     }
 }

@@ -116,6 +116,15 @@ int run_plan(const PlanOptions& o, const Globals& globals) {
     }
     std::vector<fileio::Protected> inputs = database_files(globals);
     if (!o.machine_file.empty()) inputs.push_back({o.machine_file, "machine file"});
+    try {  // both outputs checked before either is written
+        fileio::check_output(o.out, "--out", inputs);
+        if (!o.test_out.empty()) {
+            fileio::check_output(o.test_out, "--test-out", inputs);
+            fileio::check_distinct_outputs(o.out, "--out", o.test_out, "--test-out");
+        }
+    } catch (const fileio::FileError& e) {
+        throw cli_error(e);
+    }
     write_output(o.out, "--out", circle_program(t, dialect, o.dwell_s, machine ? &*machine : nullptr), inputs);
     if (o.out != "-") inputs.push_back({o.out, "program just written (--out)"});
     const std::string header = storage::test_json(t);
@@ -175,9 +184,10 @@ Loaded load_input(const std::string& input, const Globals& globals, bool store_f
         }
         return l;
     }
+    if (!looks_like_session_key(input)) throw CliError(kExitUsage, input + ": no such file");
     storage::StoreOptions so;
     so.recover = false;
-    storage::Store store(resolve_db_path(globals), so);
+    storage::Store store(existing_db_path(globals), so);  // a session is looked for, never a database made
     const auto id = store.find_session(input);
     try {
         l.trace = storage::load_trace(store, id);
@@ -259,23 +269,36 @@ BALLBAR_COMMAND(circle) {
     auto po = std::make_shared<PlanOptions>();
     auto* plan = circle->add_subcommand("plan", "Write the part program of a circular test");
     plan->add_option("--plane", po->test.plane, "XY, YZ or ZX")->capture_default_str();
-    plan->add_option("--radius", po->test.radius_mm, "programmed radius = bar length, mm")->capture_default_str();
-    plan->add_option("--centre", po->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
-    plan->add_option("--feed", po->test.feed_mm_min, "feed of every move, mm/min")->capture_default_str();
+    plan->add_option("--radius", po->test.radius_mm, "programmed radius = bar length, mm")
+        ->check(in_range(0, 10000, "mm", true))
+        ->capture_default_str();
+    plan->add_option("--centre", po->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")
+        ->expected(3)
+        ->check(in_range(-100000, 100000, "mm"));
+    plan->add_option("--feed", po->test.feed_mm_min, "feed of every move, mm/min")
+        ->check(in_range(0.1, 200000, "mm/min"))
+        ->capture_default_str();
     plan->add_option("--rate", po->rate_hz,
-                     "the instrument's reading rate, readings/s: refuse a feed too fast for it (gauges: 10-50)");
-    plan->add_option("--feed-in", po->test.feed_in_mm, "radial feed-in and feed-out, mm")->capture_default_str();
+                     "the instrument's reading rate, readings/s: refuse a feed too fast for it (gauges: 10-50)")
+        ->check(in_range(1, 100000, "readings/s"));
+    plan->add_option("--feed-in", po->test.feed_in_mm, "radial feed-in and feed-out, mm")
+        ->check(in_range(0, 10, "mm", true))
+        ->capture_default_str();
     plan->add_option("--arc", po->test.arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
+        ->check(in_range(30, 360, "°"))
         ->capture_default_str();
     plan->add_option("--overshoot", po->test.overshoot_deg,
-                     "overshoot each side, degrees (default 45 full, 20 partial)");
-    plan->add_option("--start", po->test.start_deg, "start angle of the first run, degrees (default 0 / −overshoot)");
+                     "overshoot each side, degrees (default 45 full, 20 partial)")
+        ->check(in_range(0, 360, "°"));
+    plan->add_option("--start", po->test.start_deg, "start angle of the first run, degrees (default 0 / −overshoot)")
+        ->check(in_range(-36000, 36000, "°"));
     plan->add_option("--directions", po->test.directions, "both, ccw or cw")
         ->check(CLI::IsMember({"both", "ccw", "cw"}))
         ->capture_default_str();
     plan->add_option("--dialect", po->dialect, "fanuc or linuxcnc (default: the machine file's, else fanuc)");
     plan->add_option("--machine", po->machine_file, "machine file: travel limits and dialect");
     plan->add_option("--dwell", po->dwell_s, "stand still before each feed-in and at the end, s")
+        ->check(in_range(0, 3600, "s"))
         ->capture_default_str();
     plan->add_option("--out", po->out, "program file (- for stdout)")->capture_default_str();
     plan->add_option("--test-out", po->test_out, "write the test header (JSON) to this file too");
@@ -288,7 +311,8 @@ BALLBAR_COMMAND(circle) {
         ->required();
     an->add_flag("--json", ao->json, "print the result as JSON");
     an->add_flag("--store", ao->store, "import a trace file as a session and store the result with it");
-    an->add_option("--tolerance", ao->tolerance_um, "circular deviation G allowed, µm: pass/fail (exit 1 on fail)");
+    an->add_option("--tolerance", ao->tolerance_um, "circular deviation G allowed, µm: pass/fail (exit 1 on fail)")
+        ->check(in_range(0, 10000, "µm", true));
     an->add_option("--controller", ao->controller,
                    "print backlash/scale settings: linuxcnc, marlin, smoothieware, grblhal")
         ->check(CLI::IsMember({"linuxcnc", "marlin", "smoothieware", "grblhal"}));

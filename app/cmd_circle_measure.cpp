@@ -14,6 +14,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "acquisition_adapters.hpp"
@@ -361,7 +362,9 @@ circ::TestSpec test_from_options(const MeasureOptions& o) {
 
 int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     if (o.device.empty()) throw CliError(kExitUsage, "--device URI is required");
-    storage::Store store(resolve_db_path(globals));
+    // The database is opened once the request is known to be good: a refused command creates none
+    // (a resumed session must be in an existing one).
+    std::optional<storage::Store> opened;
     circ::TestSpec test;
     std::optional<std::int64_t> resumed;
     int first_attempt = 1;
@@ -371,6 +374,7 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     if (!(dwell_s >= 0.2 && dwell_s <= 60)) throw CliError(kExitUsage, "--dwell must be 0.2 .. 60 s");
     try {
         if (!o.resume.empty()) {
+            storage::Store& store = opened.emplace(existing_db_path(globals));
             const std::int64_t id = store.find_session(o.resume);
             const storage::SessionInfo before = store.session(id);
             if (before.procedure != "circular")
@@ -394,6 +398,7 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
             resumed = id;
         } else {
             test = test_from_options(o);
+            opened.emplace(resolve_db_path(globals));
         }
     } catch (const storage::StorageError& e) {
         throw cli_error(e);
@@ -401,6 +406,7 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
         if (dynamic_cast<const CliError*>(&e)) throw;
         throw CliError(kExitUsage, e.what());
     }
+    storage::Store& store = *opened;
     const auto nc_dialect = dialect.value_or(analysis::NcDialect::Fanuc);
     std::string program;
     try {
@@ -646,16 +652,26 @@ void add_circle_measure(CLI::App& circle, Globals& globals) {
     m->add_option("--device", o->device, "Instrument URI (serial:PATH, tcp:HOST:PORT, usb:…, sylvac:PATH, …)");
     m->add_option("--test", o->test_file, "the test header (JSON) of `circle plan --test-out`");
     m->add_option("--plane", o->test.plane, "XY, YZ or ZX (without --test)")->capture_default_str();
-    m->add_option("--radius", o->test.radius_mm, "programmed radius = bar length, mm")->capture_default_str();
-    m->add_option("--centre", o->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")->expected(3);
-    m->add_option("--feed", o->test.feed_mm_min, "feed, mm/min")->capture_default_str();
+    m->add_option("--radius", o->test.radius_mm, "programmed radius = bar length, mm")
+        ->check(in_range(0, 10000, "mm", true))
+        ->capture_default_str();
+    m->add_option("--centre", o->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")
+        ->expected(3)
+        ->check(in_range(-100000, 100000, "mm"));
+    m->add_option("--feed", o->test.feed_mm_min, "feed, mm/min")
+        ->check(in_range(0.1, 200000, "mm/min"))
+        ->capture_default_str();
     auto* feed_in = m->add_option("--feed-in", o->test.feed_in_mm,
                                   "radial feed-in and feed-out, mm (default: 1.5, or less to keep the stand within "
-                                  "the bar's range)");
+                                  "the bar's range)")
+                        ->check(in_range(0, 10, "mm", true));
     m->add_option("--arc", o->test.arc_deg, "data arc, degrees (360 full circle; 180 the partial arc)")
+        ->check(in_range(30, 360, "°"))
         ->capture_default_str();
     m->add_option("--dialect", o->dialect, "part program dialect: fanuc or linuxcnc")->capture_default_str();
-    m->add_option("--dwell", o->dwell_s, "stand before each feed-in, s")->capture_default_str();
+    m->add_option("--dwell", o->dwell_s, "stand before each feed-in, s")
+        ->check(in_range(0.2, 60, "s"))
+        ->capture_default_str();
     m->add_option("--program", o->program_file, "where to write the part program (default ballbar-session-ID.nc)");
     m->add_option("--resume", o->resume, "continue an interrupted circular session (id or uuid prefix)");
     m->add_option("--operator", o->operator_name, "operator name stored with the session");

@@ -407,7 +407,7 @@ BALLBAR_COMMAND(compensate) {
     sub->add_flag("--exact", args->exact, "exact (Newton) solution instead of the first-order Jacobian one");
     sub->add_option("--singular-deg", args->singular_deg,
                     "within this angle of a singularity the rotary axis is not corrected (default 0.06)")
-        ->check(CLI::Range(0.0, 45.0));
+        ->check(in_range(0, 45, "°"));
     sub->add_option("--offsets", args->offsets, "work-offset and tool table (JSON, docs/compensation.md)");
     sub->add_option("--controller", args->controller,
                     "tool-centre-point codes of: linuxcnc (M428/M429), fanuc (G43.4/G49), siemens (TRAORI/TRAFOOF), "
@@ -418,16 +418,17 @@ BALLBAR_COMMAND(compensate) {
     sub->add_flag("--iso-directions", args->iso_directions,
                   "the program's +A/+C are ISO's (LinuxCNC conventional-directions): the opposite of ballbar's");
     sub->add_option("--chord-tolerance", args->chord_tolerance_mm,
-                    "arcs are written as chords within this of the arc, mm (default 0.001)");
+                    "arcs are written as chords within this of the arc, mm (default 0.001)")
+        ->check(in_range(1e-5, 0.1, "mm"));
     sub->add_option("--max-correction-mm", args->max_correction_mm, "refuse a larger linear correction (default 1)")
-        ->check(CLI::Range(1e-6, 100.0));
+        ->check(in_range(1e-6, 100, "mm"));
     sub->add_option("--max-correction-deg", args->max_correction_deg,
                     "refuse a larger rotary correction; no angle moves more (default 0.1)")
-        ->check(CLI::Range(1e-6, 10.0));
+        ->check(in_range(1e-6, 10, "°"));
     sub->add_option("--max-iterations", args->max_iterations, "--exact: Newton iterations at most (default 20)")
-        ->check(CLI::Range(1, 1000));
+        ->check(in_range(1, 1000));
     sub->add_option("--decimals", args->decimals, "digits after the point of the axis words (default 4)")
-        ->check(CLI::Range(3, 8));
+        ->check(in_range(3, 8));
     sub->add_flag("--force", args->force, "write corrections beyond the bounds, and --exact non-convergence, anyway");
     sub->add_flag("--allow-truncated", args->allow_truncated, "compensate a program without M2/M30/% as it is");
     sub->add_flag("--json", args->json, "print the report as JSON");

@@ -411,7 +411,8 @@ BALLBAR_COMMAND(discover) {
     sub->add_option("--save-model", opts->save_model,
                     "Name of the extended model stored with the sessions (default <machine>-discovered)");
     sub->add_option("--noise-um", opts->noise_um,
-                    "Noise of one reading in um (default: from the readings' n/std_mm or repeated points)");
+                    "Noise of one reading in µm (default: from the readings' n/std_mm or repeated points)")
+        ->check(in_range(0, 1000, "µm", true));
     sub->add_flag("--json", opts->json, "Print the result as JSON");
     sub->callback([opts, &globals] { globals.action = [opts, &globals] { return run_discover(*opts, globals); }; });
 }

@@ -99,19 +99,22 @@ BALLBAR_COMMAND(emulate) {
     auto* sub = root.add_subcommand("emulate", "Run the emulated instrument behind a pseudo-terminal or a TCP port");
     auto o = std::make_shared<EmulateOptions>();
     sub->add_flag("--pty", o->pty, "Serve on a new pseudo-terminal; prints its path (use serial:PATH)");
-    sub->add_option("--tcp", o->tcp_port, "Serve on 127.0.0.1:PORT (0 picks a free port); prints tcp:127.0.0.1:PORT");
+    sub->add_option("--tcp", o->tcp_port, "Serve on 127.0.0.1:PORT (0 picks a free port); prints tcp:127.0.0.1:PORT")
+        ->check(ballbar::app::in_range(0, 65535));
     sub->add_option("--config", o->config, "Emulator configuration (JSON, docs/emulator.md)");
     sub->add_option("--seed", o->seed, "Random seed (overrides the configuration's)");
     sub->add_flag("--fast", o->fast, "Stream as fast as the host reads instead of in real time");
     sub->add_option("--link", o->link, "Keep a symlink at this path to the current pty");
     sub->add_option("--watchdog", o->watchdog_s,
-                    "Stop streaming after this many seconds without the host (default 5, 0 = never)");
+                    "Stop streaming after this many seconds without the host (default 5, 0 = never)")
+        ->check(ballbar::app::in_range(0, 3600, "s"));
     sub->add_flag("-v,--verbose", o->verbose, "Log connections to stderr");
     sub->add_option("--instrument", o->instrument,
                     "ballbar (default), or a serial gauge: sylvac, digimatic, modbus (docs/instruments.md)")
         ->check(CLI::IsMember({"ballbar", "sylvac", "digimatic", "modbus", "mitutoyo-itn"}));
     sub->add_option("--faults", o->faults,
                     "Gauge faults: not-ready=P,out-of-range=P,no-reply=P,cut-off=P,inch,low-battery");
-    sub->add_option("--rate", o->rate_hz, "Gauge readings per second")->check(CLI::Range(1.0, 1000.0));
+    sub->add_option("--rate", o->rate_hz, "Gauge readings per second")
+        ->check(ballbar::app::in_range(1, 1000, "readings/s"));
     sub->callback([&globals, o] { globals.action = [o]() -> int { return run_emulate(*o); }; });
 }

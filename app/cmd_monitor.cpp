@@ -119,13 +119,19 @@ int run_monitor(const MonitorOptions& o) {
         failure = e.what();
     }
     const auto& st = inst->stats();
+    // An instrument that answers but never streams is no working instrument: not "0 samples, std 0 µm".
+    if (failure.empty() && sum.n == 0)
+        failure =
+            "the instrument answered but sent no samples: it does not stream (check its mode and cable, or "
+            "power-cycle it)";
+    const auto or_null = [&sum](double v) { return sum.n > 0 ? nlohmann::json(v) : nlohmann::json(nullptr); };
     if (o.json) {
         nlohmann::json j{{"samples", sum.n},
                          {"lost_frames", st.lost_frames},
-                         {"rate_hz", sum.rate_hz()},
-                         {"mean_mm", sum.mean},
-                         {"std_mm", sum.std_mm()},
-                         {"bar_temp_C", sum.temp_C},
+                         {"rate_hz", or_null(sum.rate_hz())},
+                         {"mean_mm", or_null(sum.mean)},
+                         {"std_mm", or_null(sum.std_mm())},
+                         {"bar_temp_C", or_null(sum.temp_C)},
                          {"invalid_frames", st.invalid_frames},
                          {"queue_drops", st.queue_drops},
                          {"replayed_frames", st.replayed_frames},
@@ -135,7 +141,7 @@ int run_monitor(const MonitorOptions& o) {
                          {"device", o.device}};
         if (!failure.empty()) j["error"] = failure;
         std::cout << j.dump() << '\n';
-    } else {
+    } else if (sum.n > 0) {
         std::cout << sum.n << " samples, " << st.lost_frames << " lost frames, " << sum.rate_hz() << " Hz, mean "
                   << sum.mean << " mm, std " << sum.std_mm() * 1e3 << " µm\n";
     }
@@ -156,9 +162,9 @@ BALLBAR_COMMAND(monitor) {
            "sylvac:PATH, mitutoyo-itn:[SERIAL], digimatic:PATH, modbus:PATH[?slave=N&baud=B]")
         ->required();
     sub->add_option("--seconds", o->seconds, "Stream this long, then print the summary (default: until Ctrl-C)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(ballbar::app::in_range(0, 604800, "s"));
     sub->add_flag("--json", o->json, "Print only a JSON summary at the end");
-    sub->add_option("--rate", o->rate_hz, "Sample rate to configure, Hz")->check(CLI::Range(1, 5000));
-    sub->add_option("--averaging", o->averaging, "Readings averaged per sample")->check(CLI::Range(1, 64));
+    sub->add_option("--rate", o->rate_hz, "Sample rate to configure, Hz")->check(ballbar::app::in_range(1, 5000, "Hz"));
+    sub->add_option("--averaging", o->averaging, "Readings averaged per sample")->check(ballbar::app::in_range(1, 64));
     sub->callback([&globals, o] { globals.action = [o]() -> int { return run_monitor(*o); }; });
 }

@@ -92,7 +92,8 @@ BALLBAR_COMMAND(report) {
     sub->add_option("--out,-o", opts->out, "Write the PDF report to this file");
     sub->add_flag("--json", opts->json, "Print the report's content as JSON (schema ballbar-report/1)");
     sub->add_option("--tolerance", opts->tolerance_um,
-                    "circular test: G allowed, µm, for the pass/fail verdict (default: the stored result's)");
+                    "circular test: G allowed, µm, for the pass/fail verdict (default: the stored result's)")
+        ->check(in_range(0, 10000, "µm", true));
     sub->callback([opts, &globals] { globals.action = [opts, &globals] { return run_report(*opts, globals); }; });
 }
 

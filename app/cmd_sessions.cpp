@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 
 #include "ballbar/storage/imports.hpp"
 #include "ballbar/storage/session_clock.hpp"
@@ -12,6 +13,7 @@
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
 #include "figures.hpp"
+#include "files.hpp"
 #include "storage_errors.hpp"
 
 namespace ballbar::app {
@@ -35,37 +37,41 @@ std::string machine_label(const analysis::MachineGeometry& m) {
     return s;
 }
 
-int list_sessions(const SessionsOptions& o, const Globals& globals) {
+int list_sessions(const SessionsOptions& o, const Globals& globals, std::ostream& out) {
     const std::string path = resolve_db_path(globals);
     if (!std::filesystem::exists(path)) {  // listing does not create a database
-        std::cout << (o.json ? "[]" : "no sessions (no database at " + path + ")") << '\n';
+        out << (o.json ? "[]" : "no sessions (no database at " + path + ")") << '\n';
         return kExitOk;
     }
     auto store = open_reader(globals);
     if (o.json) {
-        std::cout << storage::sessions_json(store) << '\n';
+        out << storage::sessions_json(store) << '\n';
         return kExitOk;
     }
     const auto sessions = store.sessions();
     if (sessions.empty()) {
-        std::cout << "no sessions in " << store.path() << '\n';
+        out << "no sessions in " << store.path() << '\n';
         return kExitOk;
     }
-    std::printf("%5s  %-8s  %-11s  %-8s  %-24s  %-24s  %6s  %9s  %s\n", "id", "uuid", "state", "source", "machine",
-                "started", "points", "samples", "operator");
+    char line[512];
+    std::snprintf(line, sizeof line, "%5s  %-8s  %-11s  %-8s  %-24s  %-24s  %6s  %9s  ", "id", "uuid", "state",
+                  "source", "machine", "started", "points", "samples");
+    out << line << "operator\n";
     for (const auto& s : sessions) {
-        std::printf("%5lld  %-8s  %-11s  %-8s  %-24s  %-24s  %6lld  %9lld  %s\n", static_cast<long long>(s.id),
-                    s.uuid.substr(0, 8).c_str(), std::string(storage::to_string(s.state)).c_str(),
-                    std::string(storage::to_string(s.source)).c_str(), machine_label(s.machine).c_str(),
-                    s.started_at.c_str(), static_cast<long long>(s.point_count), static_cast<long long>(s.sample_count),
-                    s.operator_name.c_str());
+        std::snprintf(line, sizeof line, "%5lld  %-8s  %-11s  %-8s  %-24s  %-24s  %6lld  %9lld  ",
+                      static_cast<long long>(s.id), s.uuid.substr(0, 8).c_str(),
+                      std::string(storage::to_string(s.state)).c_str(),
+                      std::string(storage::to_string(s.source)).c_str(), printable(machine_label(s.machine)).c_str(),
+                      printable(s.started_at).c_str(), static_cast<long long>(s.point_count),
+                      static_cast<long long>(s.sample_count));
+        out << line << s.operator_name << '\n';
     }
     return kExitOk;
 }
 
 /// Each sample segment with the instrument's resolution and measured reading rate over its samples
 /// (schema v4); nothing for a session whose segments carry none.
-void print_segments(storage::Store& store, std::int64_t id) {
+void print_segments(storage::Store& store, std::int64_t id, std::ostream& out) {
     const auto segments = store.sample_segments(id);
     const bool any = std::any_of(segments.begin(), segments.end(),
                                  [](const storage::SampleSegment& g) { return g.resolution_mm || g.reading_rate_hz; });
@@ -74,70 +80,70 @@ void print_segments(storage::Store& store, std::int64_t id) {
     for (std::size_t k = 0; k < segments.size(); ++k) {
         const auto& g = segments[k];
         const std::uint64_t next = k + 1 < segments.size() ? segments[k + 1].first_seq : end;
-        std::cout << "    samples " << g.first_seq << "-" << (next > g.first_seq ? next - 1 : g.first_seq) << ": ";
+        out << "    samples " << g.first_seq << "-" << (next > g.first_seq ? next - 1 : g.first_seq) << ": ";
         char line[120];
         if (g.resolution_mm && g.reading_rate_hz) {
             std::snprintf(line, sizeof line, "resolution %.4g µm, %.1f readings/s measured", *g.resolution_mm * 1e3,
                           *g.reading_rate_hz);
-            std::cout << line << '\n';
+            out << line << '\n';
         } else {
-            std::cout << "resolution and reading rate not recorded\n";
+            out << "resolution and reading rate not recorded\n";
         }
     }
 }
 
-int show_session(const SessionsOptions& o, const Globals& globals) {
+int show_session(const SessionsOptions& o, const Globals& globals, std::ostream& out) {
     auto store = open_reader(globals);
     const auto id = store.find_session(o.session);
     if (o.show_json) {
-        std::cout << storage::session_json(store, id, true) << '\n';
+        out << storage::session_json(store, id, true) << '\n';
         return kExitOk;
     }
     const auto s = store.session(id);
-    std::cout << "session " << s.id << "  " << s.uuid << '\n' << "  state       " << storage::to_string(s.state);
-    if (s.state != storage::SessionState::completed && !s.reason.empty()) std::cout << "  (" << s.reason << ")";
-    std::cout << '\n';
+    out << "session " << s.id << "  " << s.uuid << '\n' << "  state       " << storage::to_string(s.state);
+    if (s.state != storage::SessionState::completed && !s.reason.empty()) out << "  (" << s.reason << ")";
+    out << '\n';
     if (s.resumable())
-        std::cout << "  resume      ballbar measure --resume " << s.id << " --device URI  (continues after its "
-                  << s.point_count << " points)\n";
-    std::cout << "  source      " << storage::to_string(s.source) << '\n'
-              << "  procedure   " << s.procedure << '\n'
-              << "  operator    " << s.operator_name << '\n'
-              << "  machine     " << machine_label(s.machine) << '\n'
-              << "  started     " << s.started_at << '\n'
-              << "  ended       " << s.ended_at.value_or("-") << '\n';
+        out << "  resume      ballbar measure --resume " << s.id << " --device URI  (continues after its "
+            << s.point_count << " points)\n";
+    out << "  source      " << storage::to_string(s.source) << '\n'
+        << "  procedure   " << s.procedure << '\n'
+        << "  operator    " << s.operator_name << '\n'
+        << "  machine     " << machine_label(s.machine) << '\n'
+        << "  started     " << s.started_at << '\n'
+        << "  ended       " << s.ended_at.value_or("-") << '\n';
     if (s.instrument) {
         const auto& in = *s.instrument;
-        std::cout << "  instrument  " << (in.model.empty() ? "-" : in.model) << ", serial "
-                  << (in.serial.empty() ? "-" : in.serial) << ", firmware " << (in.firmware.empty() ? "-" : in.firmware)
-                  << ", calibrated length ";
+        out << "  instrument  " << (in.model.empty() ? "-" : in.model) << ", serial "
+            << (in.serial.empty() ? "-" : in.serial) << ", firmware " << (in.firmware.empty() ? "-" : in.firmware)
+            << ", calibrated length ";
         if (in.calibrated_length_mm) {
             char len[32];
             std::snprintf(len, sizeof len, "%.4f mm", *in.calibrated_length_mm);
-            std::cout << len;
+            out << len;
         } else {
-            std::cout << "-";
+            out << "-";
         }
-        std::cout << ", calibrated on " << (in.calibration_date.empty() ? "-" : in.calibration_date) << '\n';
+        out << ", calibrated on " << (in.calibration_date.empty() ? "-" : in.calibration_date) << '\n';
     } else {
-        std::cout << "  instrument  - (not recorded)\n";
+        out << "  instrument  - (not recorded)\n";
     }
-    if (!s.notes.empty()) std::cout << "  notes       " << s.notes << '\n';
+    if (!s.notes.empty()) out << "  notes       " << s.notes << '\n';
     if (const auto imp = storage::import_of(store, id))
-        std::cout << "  imported    from " << imp->file_name << " (" << imp->bytes << " bytes, SHA-256 "
-                  << imp->content_sha256 << ") at " << imp->imported_at << '\n';
-    std::cout << "  samples     " << s.sample_count;
+        out << "  imported    from " << imp->file_name << " (" << imp->bytes << " bytes, SHA-256 "
+            << imp->content_sha256 << ") at " << imp->imported_at << '\n';
+    out << "  samples     " << s.sample_count;
     if (s.sample_count > 0) {
         const storage::SessionClock clock(store, id);
         char span[160];
         std::snprintf(span, sizeof span, ", %.1f s of samples from %.1f s to %.1f s of session time, %zu segment%s",
                       clock.sampled_s(), clock.first_s(), clock.last_s(), clock.segments(),
                       clock.segments() == 1 ? "" : "s (device clock runs: reconnects, resumes)");
-        std::cout << span;
+        out << span;
     }
-    std::cout << '\n';
-    print_segments(store, id);
-    std::cout << "  points      " << s.point_count << '\n';
+    out << '\n';
+    print_segments(store, id, out);
+    out << "  points      " << s.point_count << '\n';
     for (const auto& p : store.points(id)) {
         const auto& rd = p.reading;
         char line[200];
@@ -150,42 +156,48 @@ int show_session(const SessionsOptions& o, const Globals& globals) {
         }
         std::snprintf(line, sizeof line, "    %-26s %10.5f mm (nominal %.5f mm)", where.c_str(), rd.measured_mm,
                       p.nominal_mm);
-        std::cout << line;
+        out << line;
         if (rd.std_mm) {
             std::snprintf(line, sizeof line, ", std %.2f µm", *rd.std_mm * 1e3);
-            std::cout << line;
+            out << line;
         }
-        std::cout << ", n " << rd.n << '\n';
+        out << ", n " << rd.n << '\n';
     }
-    std::cout << "  transitions\n";
+    out << "  transitions\n";
     for (const auto& t : store.transitions(id)) {
-        std::cout << "    " << t.at << "  " << (t.from ? std::string(storage::to_string(*t.from)) : std::string("-"))
-                  << " -> " << storage::to_string(t.to) << "  (" << t.event << ")\n";
+        out << "    " << t.at << "  " << (t.from ? std::string(storage::to_string(*t.from)) : std::string("-"))
+            << " -> " << storage::to_string(t.to) << "  (" << t.event << ")\n";
     }
     if (const auto steps = store.procedure_steps(id); !steps.empty()) {
-        std::cout << "  procedure steps  " << steps.size() << ", the last " << steps.back().from << " -> "
-                  << steps.back().to << " (" << steps.back().event << ") at " << steps.back().at
-                  << "; all of them: sessions show " << id << " --json\n";
+        out << "  procedure steps  " << steps.size() << ", the last " << steps.back().from << " -> " << steps.back().to
+            << " (" << steps.back().event << ") at " << steps.back().at << "; all of them: sessions show " << id
+            << " --json\n";
     }
     const auto results = store.results(id);
-    if (!results.empty()) std::cout << "  results\n";
+    if (!results.empty()) out << "  results\n";
     for (const auto& r : results) {
-        std::cout << "    #" << r.id << "  " << r.kind << "  " << r.created_at;
-        if (r.model_id) std::cout << "  model " << *r.model_id;
-        if (!r.producer.empty()) std::cout << "  by " << r.producer;
-        std::cout << '\n';
-        for (const auto& line : result_lines(r.kind, r.payload_json, s.machine.type))
-            std::cout << "        " << line << '\n';
+        out << "    #" << r.id << "  " << r.kind << "  " << r.created_at;
+        if (r.model_id) out << "  model " << *r.model_id;
+        if (!r.producer.empty()) out << "  by " << r.producer;
+        out << '\n';
+        for (const auto& line : result_lines(r.kind, r.payload_json, s.machine.type)) out << "        " << line << '\n';
     }
     return kExitOk;
 }
 
 int run(const SessionsOptions& o, const Globals& globals, bool show) {
+    // Stored text (operator, notes, machine names, file names, reasons) is anyone's: the screen gets it
+    // with its control characters made visible, never a terminal escape sequence (issue 24).
+    std::ostringstream text;
+    int code = kExitOk;
     try {
-        return show ? show_session(o, globals) : list_sessions(o, globals);
+        code = show ? show_session(o, globals, text) : list_sessions(o, globals, text);
     } catch (const storage::StorageError& e) {
         throw cli_error(e);
     }
+    const bool json = show ? o.show_json : o.json;
+    std::cout << (json ? text.str() : printable(text.str(), true));
+    return code;
 }
 
 }  // namespace

@@ -52,6 +52,13 @@ struct CommandRegistrar {
     static void ballbar_setup_##ident([[maybe_unused]] CLI::App& root,                                       \
                                       [[maybe_unused]] ::ballbar::app::Globals& globals)
 
+/// A numeric option's range, checked before the value is used: the text must be a finite number within
+/// [lo, hi] (`lo_open`: above lo). CLI::Range lets "nan" through (every comparison with NaN is false)
+/// and "inf" through a range up to the largest double; every numeric option uses this instead, so an
+/// option can never carry a value its command was not written for (issue 24: `--chord-tolerance 1000`
+/// wrote arcs as lines through their centre). The error reads "--OPTION: VALUE is outside [lo, hi] UNIT".
+CLI::Validator in_range(double lo, double hi, std::string unit = {}, bool lo_open = false);
+
 /// Ends every subcommand's --help with its examples and the exit codes (app/help_footers.cpp).
 void add_help_footers(CLI::App& root);
 

@@ -21,6 +21,11 @@ CliError cli_error(const fileio::FileError& e);
 /// malformed token echoed from a file) is cut to 40 with "…", and the whole to 2000 bytes.
 std::string readable_message(std::string_view message);
 
+/// `text` with its control characters made visible for a terminal: C0 (ESC, BEL, CR, tab…), DEL and the
+/// C1 controls (U+0080–U+009F) as \xNN or \u00NN, so stored text shown by a command can never move
+/// the cursor, retitle the window or hide what it says. `keep_newlines`: line feeds stay.
+std::string printable(std::string_view text, bool keep_newlines = false);
+
 /// A whole NC program (at most fileio::kMaxTextBytes, lines of at most fileio::kMaxLineBytes).
 std::string read_program_file(const std::string& path, const char* what);
 

@@ -69,6 +69,26 @@ void check_output(const std::string& path, std::string_view option, const std::v
     }
 }
 
+void check_distinct_outputs(const std::string& first, std::string_view first_option, const std::string& second,
+                            std::string_view second_option) {
+    if (first == "-" || second == "-" || first.empty() || second.empty()) return;
+    bool same = false;
+    struct stat a {
+    }, b{};
+    if (::stat(first.c_str(), &a) == 0 && ::stat(second.c_str(), &b) == 0) {
+        same = a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+    } else {
+        std::error_code ea, eb;
+        const fs::path pa = fs::weakly_canonical(fs::absolute(first, ea), ea);
+        const fs::path pb = fs::weakly_canonical(fs::absolute(second, eb), eb);
+        same = !ea && !eb && pa == pb;
+    }
+    if (same)
+        throw FileError(FileError::Kind::refused, std::string(second_option) + " " + second + " is the file of " +
+                                                      std::string(first_option) +
+                                                      ": one would overwrite the other (choose two files)");
+}
+
 OutputFile::OutputFile(std::string path, std::string option, const std::vector<Protected>& inputs)
     : path_(std::move(path)), option_(std::move(option)) {
     if (path_ == "-") {

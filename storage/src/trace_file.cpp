@@ -457,9 +457,15 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
     st.bind(1, session_id);
     st.bind(2, window ? window->first : std::int64_t{0});
     st.bind(3, window ? window->second : std::numeric_limits<std::int64_t>::max());
+    // Stored in whole µs and nm: each value is rebuilt as the double nearest its decimal (an integer
+    // divided by 10⁶ is rounded once), so an export writes back the text that was imported (100.7889,
+    // not 100.78890000000001) and a re-import is recognised as the same file.
+    const double reference_nm = reference_mm * 1e6;
+    const bool whole_nm = std::abs(reference_nm - std::round(reference_nm)) < 1e-3;
     while (st.step()) {
-        t.samples.push_back({static_cast<double>(st.column_int(0)) * 1e-6,
-                             reference_mm + static_cast<double>(st.column_int(1)) * 1e-6});
+        const auto nm = static_cast<double>(st.column_int(1));
+        t.samples.push_back({static_cast<double>(st.column_int(0)) / 1e6,
+                             whole_nm ? (std::round(reference_nm) + nm) / 1e6 : reference_mm + nm * 1e-6});
         if (bar) t.bar_temp_C.push_back(static_cast<double>(st.column_int(2)) / 1000.0);
     }
     if (meta.contains("air_temp_C"))

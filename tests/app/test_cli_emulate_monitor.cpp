@@ -125,6 +125,31 @@ TEST(CliEmulateMonitor, UsageAndDeviceErrors) {
     EXPECT_GT(nlohmann::json::parse(r.out).at("samples").get<int>(), 200);
 }
 
+// Issue 24: an instrument that identifies but never streams (here every stream frame is lost) is a
+// failure, exit 1, saying so; the JSON summary gives no statistics of nothing (null), not "std 0".
+TEST(CliEmulateMonitor, AnInstrumentThatNeverStreamsIsAFailureNotZeroSamples) {
+    char dir_template[] = "/tmp/ballbar-mute-XXXXXX";
+    ASSERT_NE(::mkdtemp(dir_template), nullptr);
+    const std::string cfg = std::string(dir_template) + "/mute.json";
+    FILE* f = std::fopen(cfg.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("{\"faults\": {\"drop_frame_probability\": 1}}", f);
+    std::fclose(f);
+    const auto text = run(std::string(BALLBAR_EXE) + " monitor --device emulator:" + cfg + " --seconds 0.5 2>&1");
+    EXPECT_EQ(text.code, 1) << text.out;
+    EXPECT_NE(text.out.find("sent no samples"), std::string::npos) << text.out;
+    EXPECT_EQ(text.out.find("std 0"), std::string::npos) << text.out;
+    const auto json = run(std::string(BALLBAR_EXE) + " monitor --device emulator:" + cfg + " --seconds 0.5 --json");
+    EXPECT_EQ(json.code, 1) << json.out;
+    const auto j = nlohmann::json::parse(json.out, nullptr, false);
+    ASSERT_FALSE(j.is_discarded()) << json.out;
+    EXPECT_EQ(j.at("samples").get<int>(), 0);
+    EXPECT_TRUE(j.at("std_mm").is_null()) << json.out;
+    EXPECT_NE(j.at("error").get<std::string>().find("sent no samples"), std::string::npos) << json.out;
+    std::remove(cfg.c_str());
+    ::rmdir(dir_template);
+}
+
 // `--link PATH` makes a new symlink to the pty and removes it when the emulator stops; whatever is
 // already at PATH (a file, someone's link) is refused with exit 2 and left as it was.
 TEST(CliEmulateMonitor, TheLinkIsMadeNewAndNeverOverSomethingElse) {

@@ -122,4 +122,28 @@ TEST(TraceFile, StoredAsASessionAndLoadedBack) {
     std::filesystem::remove_all(dir);
 }
 
+/// Issue 24: export → import → export was not a fixed point (100.7889 came back as
+/// 100.78890000000001, so a re-import was not recognised as the same file).
+TEST(TraceFile, StoredAndLoadedBackWritesTheSameText) {
+    const auto dir = std::filesystem::temp_directory_path() / ("ballbar_trace_fp_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    {
+        TraceFile t = read_trace_file(kDir + "spec_example.csv");
+        t.samples.clear();
+        t.bar_temp_C.clear();
+        t.air_temp_C.clear();
+        for (int i = 0; i < 2000; ++i)  // 1 kHz; lengths on a 0.1 µm grid around 100.75 mm
+            t.samples.push_back(
+                {static_cast<double>(10 * i + 3) / 1e4, static_cast<double>(1007889 + (i % 37) - 19 * (i % 11)) / 1e4});
+        const std::string first = format_trace(t);
+        Store store((dir / "t.db").string());
+        const std::string second = format_trace(load_trace(store, import_trace(store, parse_trace(first), "a.csv")));
+        const std::string third = format_trace(load_trace(store, import_trace(store, parse_trace(second), "b.csv")));
+        EXPECT_EQ(second.find("00000000"), std::string::npos) << "no binary noise in the text";
+        EXPECT_EQ(second.substr(second.find("time_s")), first.substr(first.find("time_s")));
+        EXPECT_EQ(third, second);
+    }
+    std::filesystem::remove_all(dir);
+}
+
 }  // namespace

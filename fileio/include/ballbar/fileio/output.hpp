@@ -95,4 +95,10 @@ void refuse_if_input(const std::string& path, std::string_view option, const std
 /// a command to check its outputs before it does any work.
 void check_output(const std::string& path, std::string_view option, const std::vector<Protected>& inputs);
 
+/// Refuses two outputs of one command that name the same file, before either is written (the same
+/// inode when the file exists, else the same absolute, normalised path): the second would replace the
+/// first. "-" (standard output) is never refused. Throws FileError (refused) naming both options.
+void check_distinct_outputs(const std::string& first, std::string_view first_option, const std::string& second,
+                            std::string_view second_option);
+
 }  // namespace ballbar::fileio
