@@ -121,6 +121,7 @@ json read_request(const std::string& input_path) {
                                    ? fileio::InputFile::standard_input("request")
                                    : fileio::InputFile::open(input_path, "request file");
         text = fileio::read_whole(in, fileio::kMaxJsonBytes);
+        fileio::check_json_nesting(text, "request");
     } catch (const fileio::FileError& e) {
         throw RequestError{e.what(), "--input"};
     }

@@ -47,7 +47,7 @@ std::string printable(std::string_view text, bool keep_newlines) {
 
 std::string read_file(const std::string& path, const char* what) {
     try {
-        return fileio::read_whole(path, what, fileio::kMaxJsonBytes);
+        return fileio::read_json(path, what);
     } catch (const fileio::FileError& e) {
         throw cli_error(e);
     }

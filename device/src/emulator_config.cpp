@@ -272,7 +272,7 @@ void parse_continuous(const json& j, ContinuousErrors& e) {
 /// A configuration (at most fileio::kMaxJsonBytes) or an NC program (fileio::kMaxTextBytes).
 std::string read_file(const std::string& path, const char* what, bool program = false) {
     try {
-        return program ? fileio::read_text(path, what) : fileio::read_whole(path, what, fileio::kMaxJsonBytes);
+        return program ? fileio::read_text(path, what) : fileio::read_json(path, what);
     } catch (const fileio::FileError& e) {
         throw std::invalid_argument(e.what());
     }
@@ -283,9 +283,12 @@ std::string read_file(const std::string& path, const char* what, bool program = 
 EmulatorConfig parse_emulator_config(std::string_view json_text, const std::string& base_dir) {
     json j;
     try {
+        fileio::check_json_nesting(json_text, "emulator config");  // also the inline --faults
         j = json::parse(json_text);
     } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
         throw std::invalid_argument(std::string("emulator config: not valid JSON: ") + e.what());
+    } catch (const fileio::FileError& e) {
+        throw std::invalid_argument(e.what());
     }
     EmulatorConfig c;
     only_keys(j, "", {"seed", "instrument", "machine", "program", "faults", "continuous"});

@@ -130,6 +130,37 @@ std::string read_whole(const std::string& path, std::string_view what, std::size
     return read_whole(f, max_bytes);
 }
 
+void check_json_nesting(std::string_view text, std::string_view what, int max_depth) {
+    int depth = 0;
+    bool in_string = false, escaped = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (in_string) {
+            if (escaped)
+                escaped = false;
+            else if (c == '\\')
+                escaped = true;
+            else if (c == '"')
+                in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            if (++depth > max_depth)
+                throw FileError(FileError::Kind::refused, std::string(what) + ": JSON nested deeper than " +
+                                                              std::to_string(max_depth) + " levels (at byte " +
+                                                              std::to_string(i + 1) + ")");
+        } else if ((c == ']' || c == '}') && depth > 0) {
+            --depth;
+        }
+    }
+}
+
+std::string read_json(const std::string& path, std::string_view what) {
+    std::string text = read_whole(path, what, kMaxJsonBytes);
+    check_json_nesting(text, what);
+    return text;
+}
+
 std::string read_text(const std::string& path, std::string_view what, std::size_t max_bytes, std::size_t max_line) {
     std::string text = read_whole(path, what, max_bytes);
     std::size_t start = 0;

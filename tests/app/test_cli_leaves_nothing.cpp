@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "cli_harness.hpp"
 
@@ -83,6 +84,28 @@ TEST(CliLeavesNothing, StoredTextCannotSendTerminalEscapes) {
     // --json keeps the text as it is (JSON escapes it itself).
     const CliRun json = run(dir, "sessions show 1 --json");
     EXPECT_NE(json.out.find("Eve\\u001b]0;pwned"), std::string::npos) << json.out;
+}
+
+/// Issue 24: a JSON input of 16 MiB of "[" (under the 16 MiB cap) took 1.27 GB and seconds in every
+/// command reading JSON; it is refused at once, naming the input and the byte.
+TEST(CliLeavesNothing, DeeplyNestedJsonIsRefusedAtOnce) {
+    TempDir dir;
+    std::ofstream(dir.path / "deep.json") << std::string(1u << 20, '[');
+    std::ofstream(dir.path / "x.nc") << "%\nO0001\nG90 G21\nG0 X0 Y0 Z0 A0 C0\nM30\n%\n";
+    const std::string deep = dir.file("deep.json");
+    const std::pair<std::string, std::string> cases[] = {
+        {"measure --dry-run --machine " + deep, "machine file: JSON nested deeper than 64 levels (at byte 65)"},
+        {"compensate --model " + deep + " --program " + dir.file("x.nc") + " --out " + dir.file("o.nc"),
+         "JSON nested deeper than 64"},
+        {"solve ssm --input " + deep, "JSON nested deeper than 64"},
+        {"emulate --pty --config " + deep, "JSON nested deeper than 64"},
+        {"demo --faults " + deep, "JSON nested deeper than 64"},
+    };
+    for (const auto& [args, says] : cases) {
+        const CliRun r = run(dir, args);
+        EXPECT_NE(r.code, 0) << args;
+        EXPECT_NE((r.err + r.out).find(says), std::string::npos) << args << ": " << r.err << r.out;
+    }
 }
 
 }  // namespace

@@ -137,4 +137,20 @@ TEST(FileioInput, CutKeepsUtf8Whole) {
     EXPECT_EQ(cut(mu), std::string(39, 'a') + "…");
 }
 
+/// Issue 24: 16 MiB of "[" took 1.27 GB in the JSON parser before it failed. The nesting is checked
+/// first, in one pass without allocating; brackets inside strings do not count.
+TEST(FileioInput, JsonNestedDeeperThanTheLimitIsRefusedBeforeParsing) {
+    EXPECT_NO_THROW(check_json_nesting(std::string(64, '[') + std::string(64, ']'), "model"));
+    try {
+        check_json_nesting(std::string(65, '['), "model");
+        FAIL() << "65 levels accepted";
+    } catch (const FileError& e) {
+        EXPECT_EQ(e.kind(), FileError::Kind::refused);
+        EXPECT_EQ(std::string(e.what()), "model: JSON nested deeper than 64 levels (at byte 65)");
+    }
+    EXPECT_NO_THROW(check_json_nesting(R"({"a": ")" + std::string(1000, '[') + R"(\"[", "b": [[1]]})", "x"));
+    EXPECT_NO_THROW(check_json_nesting(std::string(1000, ']'), "x")) << "not JSON, but not deep: the parser says";
+    EXPECT_THROW(check_json_nesting(std::string(16u << 20, '['), "plan"), FileError);
+}
+
 }  // namespace
