@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The real libserialport against the emulator behind a umockdev CDC-ACM testbed (/dev/ttyACM0 with
 // its USB parent in sysfs, a pty underneath; the modem-line ioctls are answered here), following
-// shared/research/umockdev-prototypes/serial/serialsim.c. Runs under LD_PRELOAD=libumockdev-preload.
+// the set-up docs/device.md describes ("libserialport behind umockdev"). Runs under LD_PRELOAD=libumockdev-preload.
 // Covers: enumeration with VID/PID, open/configure through libserialport, identify and lossless
 // streaming through the driver, an unplug mid-stream (DeviceError{Disconnected}) and a replug.
 #include <fcntl.h>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The X'Y'ZA'C' machine of Lei & Hsu (2003), the second seed: nominal forward kinematics, the
 // first-order inverse-Jacobian correction and an exact (Gauss–Newton) correction, as corrected in
-// shared/research/seed-math.md (docs/compensation.md names what the paper printed wrong).
+// docs/compensation.md (which also names what the paper printed wrong).
 //
 // u = (x_m, y_m, z_m, θa, θc) (mm, rad); v = (x_w, y_w, z_w, i_w, j_w, k_w) in workpiece coordinates:
 //   P = R·(x_m, y_m, z_m) − (X_w0, Y_w0, Z3 + Z_w0),  Q = R·e_z,  R = Rz(−θc)·Rx(−θa)·diag(−1, −1, 1).

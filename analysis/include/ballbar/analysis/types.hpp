@@ -2,7 +2,7 @@
 // Value types shared by every layer: machine types, geometry, commanded poses.
 //
 // Units: lengths in millimetres, angles in radians, times in seconds, temperatures in °C.
-// Conventions are the seeds' (see docs/kinematics.md and shared/formats/readings.md): rotations are
+// Conventions are the seeds' (see docs/kinematics.md and docs/formats/readings.md): rotations are
 // right-handed about +X/+Y/+Z, applied in the order written.
 #pragma once
 

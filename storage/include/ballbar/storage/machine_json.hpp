@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // JSON forms of the machine geometry and the instrument, as in the `machine` and `instrument` headers of
-// `ballbar-readings/1` (shared/formats/readings.md). Lengths in mm.
+// `ballbar-readings/1` (docs/formats/readings.md). Lengths in mm.
 #pragma once
 
 #include <stdexcept>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Reader and writer of `ballbar-readings/1` files (shared/formats/readings.md): a `#` header with the
+// Reader and writer of `ballbar-readings/1` files (docs/formats/readings.md): a `#` header with the
 // machine (and optional instrument, operator, started_at, notes, other keys), then RFC 4180 CSV with
 // columns identified by name. A file is accepted whole or refused with the line and the problem.
 #pragma once
