@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "ballbar/analysis/circular.hpp"
+#include "command.hpp"
 
 namespace ballbar::app {
 
@@ -23,6 +24,10 @@ struct CircleTestOptions {
     std::optional<double> start_deg;      ///< default: 0 (full) or −overshoot (partial)
     std::string directions = "both";      ///< both (ccw, then cw from where it ended), ccw or cw
 };
+
+/// Adds --radius, --centre and --feed to `cmd` (`circle plan`, `circle measure`), each checked against
+/// the test header's range (docs/formats/trace.md); `feed_help` is the command's own words for --feed.
+void add_circle_geometry_options(CLI::App& cmd, CircleTestOptions& test, const std::string& feed_help);
 
 /// The test these options describe; CliError (usage) naming the option when it is not a test.
 analysis::circular::TestSpec circle_test(const CircleTestOptions& o);

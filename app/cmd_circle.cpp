@@ -269,15 +269,7 @@ BALLBAR_COMMAND(circle) {
     auto po = std::make_shared<PlanOptions>();
     auto* plan = circle->add_subcommand("plan", "Write the part program of a circular test");
     plan->add_option("--plane", po->test.plane, "XY, YZ or ZX")->capture_default_str();
-    plan->add_option("--radius", po->test.radius_mm, "programmed radius = bar length, mm")
-        ->check(in_range(0, 10000, "mm", true))
-        ->capture_default_str();
-    plan->add_option("--centre", po->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")
-        ->expected(3)
-        ->check(in_range(-100000, 100000, "mm"));
-    plan->add_option("--feed", po->test.feed_mm_min, "feed of every move, mm/min")
-        ->check(in_range(0.1, 200000, "mm/min"))
-        ->capture_default_str();
+    add_circle_geometry_options(*plan, po->test, "feed of every move, mm/min");
     plan->add_option("--rate", po->rate_hz,
                      "the instrument's reading rate, readings/s: refuse a feed too fast for it (gauges: 10-50)")
         ->check(in_range(1, 100000, "readings/s"));

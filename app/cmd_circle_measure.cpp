@@ -652,15 +652,7 @@ void add_circle_measure(CLI::App& circle, Globals& globals) {
     m->add_option("--device", o->device, "Instrument URI (serial:PATH, tcp:HOST:PORT, usb:…, sylvac:PATH, …)");
     m->add_option("--test", o->test_file, "the test header (JSON) of `circle plan --test-out`");
     m->add_option("--plane", o->test.plane, "XY, YZ or ZX (without --test)")->capture_default_str();
-    m->add_option("--radius", o->test.radius_mm, "programmed radius = bar length, mm")
-        ->check(in_range(0, 10000, "mm", true))
-        ->capture_default_str();
-    m->add_option("--centre", o->test.centre_mm, "circle centre X Y Z, mm (where the socket sits)")
-        ->expected(3)
-        ->check(in_range(-100000, 100000, "mm"));
-    m->add_option("--feed", o->test.feed_mm_min, "feed, mm/min")
-        ->check(in_range(0.1, 200000, "mm/min"))
-        ->capture_default_str();
+    add_circle_geometry_options(*m, o->test, "feed, mm/min");
     auto* feed_in = m->add_option("--feed-in", o->test.feed_in_mm,
                                   "radial feed-in and feed-out, mm (default: 1.5, or less to keep the stand within "
                                   "the bar's range)")

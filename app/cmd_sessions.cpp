@@ -58,12 +58,11 @@ int list_sessions(const SessionsOptions& o, const Globals& globals, std::ostream
                   "source", "machine", "started", "points", "samples");
     out << line << "operator\n";
     for (const auto& s : sessions) {
-        std::snprintf(line, sizeof line, "%5lld  %-8s  %-11s  %-8s  %-24s  %-24s  %6lld  %9lld  ",
-                      static_cast<long long>(s.id), s.uuid.substr(0, 8).c_str(),
-                      std::string(storage::to_string(s.state)).c_str(),
-                      std::string(storage::to_string(s.source)).c_str(), printable(machine_label(s.machine)).c_str(),
-                      printable(s.started_at).c_str(), static_cast<long long>(s.point_count),
-                      static_cast<long long>(s.sample_count));
+        std::snprintf(
+            line, sizeof line, "%5lld  %-8s  %-11s  %-8s  %-24s  %-24s  %6lld  %9lld  ", static_cast<long long>(s.id),
+            s.uuid.substr(0, 8).c_str(), std::string(storage::to_string(s.state)).c_str(),
+            std::string(storage::to_string(s.source)).c_str(), machine_label(s.machine).c_str(), s.started_at.c_str(),
+            static_cast<long long>(s.point_count), static_cast<long long>(s.sample_count));
         out << line << s.operator_name << '\n';
     }
     return kExitOk;
