@@ -358,10 +358,15 @@ void Emulator::advance_to(std::uint64_t t_us) {
         on_host_bytes(input);
     }
     const auto& in = config_.instrument;
-    if (streaming_ && in.watchdog_s > 0 && static_cast<double>(now_us_ - last_host_us_) * 1e-6 > in.watchdog_s) {
-        flush_stream();
-        streaming_ = false;
-    }
+    if (!external_watchdog_ && streaming_ && in.watchdog_s > 0 &&
+        static_cast<double>(now_us_ - last_host_us_) * 1e-6 > in.watchdog_s)
+        watchdog_expired();
+}
+
+void Emulator::watchdog_expired() {
+    if (!streaming_) return;
+    flush_stream();
+    streaming_ = false;
 }
 
 std::size_t Emulator::take_device_bytes(std::span<std::uint8_t> out) {

@@ -96,8 +96,15 @@ int TcpListener::accept(milliseconds timeout) {
 // ---- EmulatorHost ----
 
 EmulatorHost::EmulatorHost(Emulator& emulator, HostOptions options)
-    : emu_(emulator), options_(std::move(options)), last_real_(steady_clock::now()) {
+    : emu_(emulator),
+      options_(std::move(options)),
+      last_real_(steady_clock::now()),
+      requests_seen_(emu_.counters().requests),
+      last_request_real_(last_real_) {
     tx_.reserve(options_.backlog_bytes * 2);
+    // As fast as the host reads, the emulator's clock runs many times faster than the wall clock; a
+    // watchdog counted on it would stop the stream between two keep-alives of a live host.
+    if (options_.pacing == Pacing::Simulated) emu_.set_external_watchdog(true);
 }
 
 void EmulatorHost::tick() {
@@ -105,6 +112,15 @@ void EmulatorHost::tick() {
     const auto real_us = static_cast<std::uint64_t>(duration_cast<microseconds>(now - last_real_).count());
     last_real_ = now;
     emu_.advance_to(emu_.now_us() + real_us);
+    if (options_.pacing == Pacing::Simulated) {
+        if (emu_.counters().requests != requests_seen_) {
+            requests_seen_ = emu_.counters().requests;
+            last_request_real_ = now;
+        }
+        const double watchdog_s = emu_.config().instrument.watchdog_s;
+        if (watchdog_s > 0 && emu_.streaming() && duration<double>(now - last_request_real_).count() > watchdog_s)
+            emu_.watchdog_expired();
+    }
     if (options_.pacing == Pacing::Simulated && emu_.streaming()) {
         for (int i = 0; i < 256 && emu_.pending_output() + (tx_.size() - tx_off_) < options_.backlog_bytes; ++i) {
             emu_.advance_to(emu_.now_us() + static_cast<std::uint64_t>(options_.step.count()));

@@ -170,7 +170,7 @@ Emulate start_emulator(const TempDir& dir) {
       "continuous": {"servo_lag_ms": {"X": 6, "Y": 4}, "backlash_um": {"X": 4, "Y": -2.5},
                      "squareness_um_per_m": {"XY": 40}}
     })";
-    return spawn({BALLBAR_EXE, "emulate", "--pty", "--fast", "--watchdog", "600", "--config", dir.file("emu.json")});
+    return spawn({BALLBAR_EXE, "emulate", "--pty", "--fast", "--config", dir.file("emu.json")});
 }
 
 void stop_emulator(Emulate& e) {

@@ -103,6 +103,25 @@ TEST(PtyLink, StreamsWithoutLossAtFullSpeed) {
     for (std::size_t i = 1; i < s.size(); ++i) ASSERT_EQ(s[i].device_time_us - s[i - 1].device_time_us, 200u);
 }
 
+/// As fast as the host reads, 20 s of the instrument's clock pass in a fraction of a second: its
+/// watchdog (2 s here) must count the host's silence on the wall clock, or it stops the stream of a
+/// host that is reading all the time (issue 24: `emulate --fast` and measure's "sends nothing").
+TEST(PtyLink, AsFastAsTheHostReadsTheWatchdogCountsWallClockSilence) {
+    auto cfg = fast_config();
+    cfg.instrument.watchdog_s = 2.0;
+    PtyFixture fx(cfg);
+    Instrument inst(open_transport("serial:" + fx.wait_pty(1)));
+    inst.identify();
+    inst.configure(5000, 1);
+    inst.start_streaming();
+    std::vector<analysis::BarSample> s;
+    ASSERT_EQ(stream(inst, 100000, s), 100000u)
+        << "the stream stopped after " << 1e-6 * static_cast<double>(s.back().device_time_us) << " s";
+    // A host that goes quiet for longer than the watchdog, in wall-clock time, is still let go.
+    std::this_thread::sleep_for(3s);
+    EXPECT_FALSE(inst.status().streaming);
+}
+
 TEST(PtyLink, DisconnectIsReportedAndANewPtyComesBack) {
     auto cfg = fast_config();
     // Late enough that the as-fast-as-possible host (which runs ~1.3 s of samples ahead of the reader)

@@ -115,6 +115,13 @@ class Emulator : public DeviceEndpoint {
     const EmulatorConfig& config() const { return config_; }
     FaultConfig& faults() { return config_.faults; }
     bool streaming() const { return streaming_; }
+    /// The watchdog (InstrumentConfig::watchdog_s) counts the host's silence on the emulator's clock,
+    /// which is real time on a real instrument. A host that runs that clock faster than real time
+    /// (Pacing::Simulated) counts the silence on the wall clock instead: it turns the emulator's own
+    /// count off here and calls watchdog_expired() when its count runs out.
+    void set_external_watchdog(bool on) { external_watchdog_ = on; }
+    /// The host has been silent for watchdog_s by the external count: stop streaming as the watchdog would.
+    void watchdog_expired();
     double bar_temp_C(std::uint64_t t_us) const;
 
     struct Counters {
@@ -158,6 +165,7 @@ class Emulator : public DeviceEndpoint {
     std::vector<std::uint8_t> stalled_input_;
     std::uint64_t now_us_ = 0;
     std::uint64_t last_host_us_ = 0;
+    bool external_watchdog_ = false;
     bool connected_ = true;
     bool disconnect_done_ = false;
     std::uint64_t epoch_ = 0;

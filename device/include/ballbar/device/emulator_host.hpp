@@ -86,6 +86,9 @@ class EmulatorHost {
     Emulator& emu_;
     HostOptions options_;
     std::chrono::steady_clock::time_point last_real_;
+    // Pacing::Simulated: the instrument's watchdog counts the host's silence on the wall clock.
+    std::uint64_t requests_seen_ = 0;
+    std::chrono::steady_clock::time_point last_request_real_;
     std::vector<std::uint8_t> tx_;
     std::size_t tx_off_ = 0;
 };
