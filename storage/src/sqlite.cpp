@@ -59,10 +59,29 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
             flags |= SQLITE_OPEN_READWRITE;
             break;
         case Mode::read_only:
+        case Mode::read_only_immutable:
             flags |= SQLITE_OPEN_READONLY;
             break;
     }
-    const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
+    std::string name = path;
+    if (mode == Mode::read_only_immutable) {
+        // A URI filename: '%', '?' and '#' of the path are escaped (sqlite.org/uri.html).
+        name = "file:";
+        for (const char c : path) {
+            if (c == '%' || c == '?' || c == '#') {
+                static constexpr char kHex[] = "0123456789ABCDEF";
+                const auto u = static_cast<unsigned char>(c);
+                name += '%';
+                name += kHex[u >> 4];
+                name += kHex[u & 15];
+            } else {
+                name += c;
+            }
+        }
+        name += "?immutable=1";
+        flags |= SQLITE_OPEN_URI;
+    }
+    const int rc = sqlite3_open_v2(name.c_str(), &db_, flags, nullptr);
     if (rc != SQLITE_OK) {
         const std::string msg = describe(rc, "cannot open database", path, db_ ? sqlite3_errmsg(db_) : nullptr);
         sqlite3_close_v2(db_);

@@ -16,6 +16,8 @@
 #include <random>
 #include <thread>
 
+#include <sqlite3.h>
+
 #include "ballbar/storage/machine_json.hpp"
 #include "schema.hpp"
 
@@ -41,6 +43,43 @@ std::uint64_t splitmix64(std::uint64_t& state) {
 
 bool is_memory(const std::string& path) {
     return path.empty() || path == ":memory:" || path.rfind("file::memory:", 0) == 0;
+}
+
+/// The directory `path` is in, as access(2) wants it.
+std::string directory_of(const std::string& path) {
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    return parent.empty() ? std::string(".") : parent.string();
+}
+
+/// A read of a WAL file failed because its -shm index could not be made: the directory is not writable
+/// by this process and no -wal (no writer) is there.
+bool unreadable_without_shm(const StorageError& e, const std::string& path) {
+    const int primary = e.sqlite_code() & 0xff;
+    if (primary != SQLITE_READONLY && primary != SQLITE_CANTOPEN) return false;
+    std::error_code ec;
+    return ::access(directory_of(path).c_str(), W_OK) != 0 && !std::filesystem::exists(path + "-wal", ec);
+}
+
+/// A reader's open (no recovery) of a file this process may not write — the file or its directory
+/// read-only to it — is a read-only open: WAL mode, the lock file and a migration would need writing.
+StoreOptions reader_options(StoreOptions o, const std::string& path) {
+    if (o.read_only || is_memory(path)) return o;
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) return o;
+    const bool file_writable = ::access(path.c_str(), W_OK) == 0;
+    const bool dir_writable = ::access(directory_of(path).c_str(), W_OK) == 0;
+    if (file_writable && dir_writable) return o;
+    if (!o.recover) {
+        o.read_only = true;
+        return o;
+    }
+    // A writer: said plainly here, not as SQLite's "attempt to write a readonly database" later.
+    throw StorageError(StorageError::Kind::sqlite,
+                       !file_writable ? "the database " + path + " is read-only to this user; this command writes to it "
+                                                                 "(sessions, report and export only read)"
+                                      : "the directory of the database " + path +
+                                            " is not writable by this user; this command writes to the database, "
+                                            "which needs its journal beside it (sessions, report and export only read)");
 }
 
 /// Refuses (throws) a file written by a newer ballbar, or by another application.
@@ -159,7 +198,7 @@ bool transition_allowed(SessionState from, SessionState to) {
 }
 
 Store::Store(const std::string& path, StoreOptions options)
-    : options_(std::move(options)),
+    : options_(reader_options(std::move(options), path)),
       db_((check_file(path), path),
           options_.read_only ? Database::Mode::read_only : Database::Mode::read_write_create) {
     if (!options_.clock) options_.clock = [] { return std::chrono::system_clock::now(); };
@@ -169,7 +208,16 @@ Store::Store(const std::string& path, StoreOptions options)
 
     // Read-only checks first: nothing may be written to a file we refuse. In one read transaction, so
     // that the three reads see one state of a file another process is creating.
-    {
+    try {
+        Transaction read(db_, false);
+        check_identity(db_, path);
+        read.commit();
+    } catch (const StorageError& e) {
+        // A WAL file is read through its -shm index, made beside it on the first open. In a directory
+        // this process cannot write (an archive, another user's files), no -shm can be made; when no
+        // -wal is there either, no writer has the file open, and it is read as immutable.
+        if (!options_.read_only || !unreadable_without_shm(e, path)) throw;
+        db_ = Database(path, Database::Mode::read_only_immutable);
         Transaction read(db_, false);
         check_identity(db_, path);
         read.commit();

@@ -1,6 +1,11 @@
 // SPDX-License-Identifier: MIT
 // Store: schema creation, session lifecycle and audit trail, points, results, models, lookup.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <functional>
 
 #include "ballbar/analysis/kinematics.hpp"
 #include "ballbar/storage/readings.hpp"
@@ -110,6 +115,74 @@ TEST(Store, UnfinishedSessionIsInterruptedOnReopenAndResumable) {
     w.flush();
     EXPECT_EQ(store.sample_count(id), 11);
     EXPECT_EQ(store.transitions(id).back().event, "resume");
+}
+
+/// Runs `body` in a child process as a user who may not write what root may (nobody, 65534, when
+/// the tests run as root); its return value is the exit code.
+int as_another_user(const std::function<int()>& body) {
+    const pid_t pid = ::fork();
+    if (pid < 0) return -1;
+    if (pid == 0) {
+        if (::getuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0)) ::_exit(100);
+        int code = 101;
+        try {
+            code = body();
+        } catch (...) {
+        }
+        ::_exit(code);
+    }
+    int st = 0;
+    ::waitpid(pid, &st, 0);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+/// Issue 24: `sessions` and `report` in a read-only directory failed with "attempt to write a readonly
+/// database". A reader reads a WAL database it may not write, in a directory it may not write (no
+/// -shm can be made there); a writer is told plainly that it may not write, and nothing is changed.
+TEST(Store, AReaderReadsAFileAndDirectoryItMayNotWriteAndAWriterIsToldWhy) {
+    TempDir dir;
+    const std::string path = dir.file("archive.db");
+    {
+        Store store(path, fixed_clock());
+        const auto id = store.create_session(new_session());
+        store.start_session(id);
+        store.finish_session(id);
+    }
+    ASSERT_FALSE(std::filesystem::exists(path + "-wal"));
+    const std::string before = test::slurp(path);
+    ::chmod(path.c_str(), 0444);
+    ::chmod((path + ".lock").c_str(), 0444);
+    ::chmod(dir.path().c_str(), 0555);
+    const int reader = as_another_user([&] {
+        StoreOptions o;
+        o.recover = false;  // as `sessions`, `export` and `circle analyze` open
+        Store store(path, o);
+        const auto list = store.sessions();
+        return list.size() == 1 && list[0].state == SessionState::completed ? 0 : 2;
+    });
+    const int report = as_another_user([&] {
+        StoreOptions o;
+        o.read_only = true;  // as `report` opens
+        o.recover = false;
+        Store store(path, o);
+        return store.sessions().size() == 1 ? 0 : 2;
+    });
+    const int writer = as_another_user([&] {
+        try {
+            Store store(path);
+            return 3;
+        } catch (const StorageError& e) {
+            return std::string(e.what()).find("read-only to this user") != std::string::npos ? 0 : 4;
+        }
+    });
+    ::chmod(dir.path().c_str(), 0755);
+    ::chmod(path.c_str(), 0644);
+    EXPECT_EQ(reader, 0);
+    EXPECT_EQ(report, 0);
+    EXPECT_EQ(writer, 0);
+    EXPECT_EQ(test::slurp(path), before) << "a reader changed the file";
+    EXPECT_FALSE(std::filesystem::exists(path + "-wal"));
+    EXPECT_FALSE(std::filesystem::exists(path + "-shm"));
 }
 
 TEST(Store, LiveSessionOfAnotherStoreIsNotInterrupted) {

@@ -43,7 +43,10 @@ class Statement;
 /// One SQLite connection. Move-only; closes on destruction.
 class Database {
   public:
-    enum class Mode { read_write_create, read_write, read_only };
+    /// read_only_immutable: read-only, and SQLite told that nobody changes the file while it is open
+    /// (URI parameter immutable=1): no lock, no -shm. For a WAL file in a directory this process cannot
+    /// write and no writer has open (Store's fallback): only so can it be read there.
+    enum class Mode { read_write_create, read_write, read_only, read_only_immutable };
 
     /// Opens `path` (":memory:" for an in-memory database). Throws StorageError.
     explicit Database(const std::string& path, Mode mode = Mode::read_write_create);
