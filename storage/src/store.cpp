@@ -3,6 +3,7 @@
 #include "ballbar/storage/store.hpp"
 
 #include <fcntl.h>
+#include <sqlite3.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -15,8 +16,6 @@
 #include <fstream>
 #include <random>
 #include <thread>
-
-#include <sqlite3.h>
 
 #include "ballbar/storage/machine_json.hpp"
 #include "schema.hpp"
@@ -75,11 +74,13 @@ StoreOptions reader_options(StoreOptions o, const std::string& path) {
     }
     // A writer: said plainly here, not as SQLite's "attempt to write a readonly database" later.
     throw StorageError(StorageError::Kind::sqlite,
-                       !file_writable ? "the database " + path + " is read-only to this user; this command writes to it "
-                                                                 "(sessions, report and export only read)"
-                                      : "the directory of the database " + path +
-                                            " is not writable by this user; this command writes to the database, "
-                                            "which needs its journal beside it (sessions, report and export only read)");
+                       !file_writable
+                           ? "the database " + path +
+                                 " is read-only to this user; this command writes to it "
+                                 "(sessions, report and export only read)"
+                           : "the directory of the database " + path +
+                                 " is not writable by this user; this command writes to the database, "
+                                 "which needs its journal beside it (sessions, report and export only read)");
 }
 
 /// Refuses (throws) a file written by a newer ballbar, or by another application.
