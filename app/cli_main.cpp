@@ -59,6 +59,17 @@ std::string resolve_db_path(const Globals& globals) {
     return (dir / "ballbar.db").string();
 }
 
+namespace {
+bool g_database_damaged = false;  // note_database_damage was called: the command ends with kExitFailure
+}  // namespace
+
+void note_database_damage(const std::string& damage) {
+    if (damage.empty()) return;
+    g_database_damaged = true;
+    std::cerr << "ballbar: warning: " << printable(damage, true)
+              << " What this command shows of it may be incomplete; it will exit with code " << kExitFailure << ".\n";
+}
+
 std::string existing_db_path(const Globals& globals) {
     const std::string path = resolve_db_path(globals);
     std::error_code ec;
@@ -225,7 +236,8 @@ int ballbar::app::cli_main(int argc, char** argv) {
         return kExitUsage;
     }
     try {
-        return globals.action ? globals.action() : kExitOk;
+        const int code = globals.action ? globals.action() : kExitOk;
+        return code == kExitOk && g_database_damaged ? kExitFailure : code;
     } catch (const CliError& e) {
         std::cerr << "ballbar: error: " << printable(readable_message(e.what()), true) << '\n';
         return e.code();

@@ -188,6 +188,7 @@ Loaded load_input(const std::string& input, const Globals& globals, bool store_f
     storage::StoreOptions so;
     so.recover = false;
     storage::Store store(existing_db_path(globals), so);  // a session is looked for, never a database made
+    note_database_damage(store.damage());
     const auto id = store.find_session(input);
     try {
         l.trace = storage::load_trace(store, id);

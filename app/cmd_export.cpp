@@ -32,6 +32,7 @@ int run_export(const ExportOptions& o, const Globals& globals) {
         storage::StoreOptions so;
         so.recover = false;                                   // a reader: leave sessions of a running acquisition alone
         storage::Store store(existing_db_path(globals), so);  // a reader never creates one
+        note_database_damage(store.damage());
         const auto id = store.find_session(o.session);
         if (o.format == "readings") {
             const auto info = store.session(id);

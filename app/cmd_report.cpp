@@ -48,6 +48,7 @@ int run_report(const ReportOptions& o, const Globals& globals) {
     } catch (const storage::StorageError& e) {
         throw CliError(kExitFailure, "cannot open " + db + ": " + e.what());
     }
+    note_database_damage(store->damage());
     std::int64_t id = 0;
     try {
         id = store->find_session(o.session);

@@ -44,6 +44,7 @@ int list_sessions(const SessionsOptions& o, const Globals& globals, std::ostream
         return kExitOk;
     }
     auto store = open_reader(globals);
+    note_database_damage(store.damage());
     if (o.json) {
         out << storage::sessions_json(store) << '\n';
         return kExitOk;
@@ -93,6 +94,7 @@ void print_segments(storage::Store& store, std::int64_t id, std::ostream& out) {
 
 int show_session(const SessionsOptions& o, const Globals& globals, std::ostream& out) {
     auto store = open_reader(globals);
+    note_database_damage(store.damage());
     const auto id = store.find_session(o.session);
     if (o.show_json) {
         out << storage::session_json(store, id, true) << '\n';

@@ -71,6 +71,11 @@ std::string resolve_db_path(const Globals& globals);
 /// Throws CliError(kExitUsage) naming the path.
 std::string existing_db_path(const Globals& globals);
 
+/// A reader found its database damaged (storage::Store::damage(), not empty): says so on stderr at once,
+/// and the command exits kExitFailure however it ends otherwise — what it read and showed may be
+/// incomplete. Nothing is said for an empty `damage`.
+void note_database_damage(const std::string& damage);
+
 /// True when `arg` can only be a session key (an id or a uuid prefix: digits and hex letters), so a
 /// command taking "FILE or SESSION" can say "no such file" for anything else that is not a file.
 bool looks_like_session_key(std::string_view arg);

@@ -156,13 +156,16 @@ TEST(QuickCheck, ADamagedDatabaseIsRefusedForWritingUntouchedAndStillReadable) {
     const auto sessions = reader.sessions();
     ASSERT_EQ(sessions.size(), 1u);
     EXPECT_EQ(sessions[0].state, SessionState::completed);
+    EXPECT_NE(reader.damage().find("fails SQLite's quick check"), std::string::npos)
+        << "a reader must know that what it read may be incomplete";
     EXPECT_EQ(test::slurp(path), before);
 
-    // A reader's open without recovery (`sessions`, `export`) does not pay for the check and reads it.
+    // A reader's open without recovery (`sessions`, `export`) reads it too, and knows the same.
     StoreOptions so;
     so.recover = false;
     Store listing(path, so);
     EXPECT_EQ(listing.sessions().size(), 1u);
+    EXPECT_NE(listing.damage().find("fails SQLite's quick check"), std::string::npos);
     EXPECT_EQ(test::slurp(path), before);
 }
 
@@ -179,6 +182,7 @@ TEST(QuickCheck, AReaderOfADamagedOldSchemaFileReadsItReadOnly) {
     so.recover = false;
     Store reader(path, so);
     EXPECT_EQ(reader.schema_version(), 3);
+    EXPECT_FALSE(reader.damage().empty());
     EXPECT_EQ(reader.sessions().size(), 1u);
     NewSession ns;
     ns.machine = test::tttrr();
@@ -191,6 +195,9 @@ TEST(QuickCheck, AnIntactDatabaseOpensForWriting) {
     const auto path = make_db(dir, "ok.db", 1000);
     Store store(path);
     EXPECT_EQ(store.sessions().size(), 1u);
+    StoreOptions so;
+    so.recover = false;
+    EXPECT_EQ(Store(path, so).damage(), "");
 }
 
 }  // namespace

@@ -182,6 +182,10 @@ class Store {
     const std::string& path() const { return db_.path(); }
     /// Sessions this open marked `interrupted`.
     const std::vector<std::int64_t>& recovered_sessions() const { return recovered_; }
+    /// For an open that only reads (no recovery, or read-only): "" when the file passes SQLite's quick
+    /// check, else what fails it (the message that refuses it for writing). What such an open reads of a
+    /// damaged file may be incomplete; its caller says so. (An open that writes refuses a damaged file.)
+    const std::string& damage() const { return damage_; }
     /// PRAGMA integrity_check: "ok" or the problems found.
     std::string integrity_check();
     /// ISO 8601 UTC time from the Store's clock, millisecond resolution.
@@ -279,6 +283,7 @@ class Store {
     int schema_version_ = kSchemaVersion;  // of the file: older only when opened read-only
     std::vector<std::int64_t> owned_;
     std::vector<std::int64_t> recovered_;
+    std::string damage_;
     std::uint64_t uuid_state_ = 0;
 };
 
