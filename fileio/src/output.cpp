@@ -158,13 +158,18 @@ void OutputFile::write(std::string_view bytes) {
     }
 }
 
+void OutputFile::finish() {
+    if (committed_ || mode_ != Mode::replace || fd_ < 0) return;
+    if (::fsync(fd_) != 0) fail(path_, errno);
+    const int fd = fd_;
+    fd_ = -1;
+    if (::close(fd) != 0) fail(path_, errno);
+}
+
 void OutputFile::commit() {
     if (committed_) return;
     if (mode_ == Mode::replace) {
-        if (::fsync(fd_) != 0) fail(path_, errno);
-        const int fd = fd_;
-        fd_ = -1;
-        if (::close(fd) != 0) fail(path_, errno);
+        finish();
         if (::rename(temp_.c_str(), path_.c_str()) != 0) fail(path_, errno);
     }
     committed_ = true;
@@ -198,6 +203,11 @@ OutputStream::OutputStream(std::string path, std::string option, const std::vect
     : std::ostream(nullptr), file_(std::move(path), std::move(option), inputs), buffer_(file_) {
     rdbuf(&buffer_);
     exceptions(std::ios::badbit);  // the FileError of a failed write reaches the caller
+}
+
+void OutputStream::finish() {
+    buffer_.drain();
+    file_.finish();
 }
 
 void OutputStream::commit() {

@@ -198,13 +198,17 @@ void export_csv(Store& store, std::int64_t id, const std::filesystem::path& dir)
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
-    auto write = [&](const char* name, auto&& fn) {  // fileio: exclusive temporary file, no links
-        fileio::OutputStream out((dir / name).string(), "--out");
-        fn(out);
-        out.commit();
-    };
-    write("points.csv", [&](std::ostream& o) { write_points_csv(store, id, o); });
-    write("samples.csv", [&](std::ostream& o) { write_samples_csv(store, id, o); });
+    // fileio: exclusive temporary files, no links. Both are written in full before either replaces
+    // anything: a full disk or a damaged database half-way leaves the directory as it was, never a new
+    // points.csv beside an old samples.csv.
+    fileio::OutputStream points((dir / "points.csv").string(), "--out");
+    fileio::OutputStream samples((dir / "samples.csv").string(), "--out");
+    write_points_csv(store, id, points);
+    write_samples_csv(store, id, samples);
+    points.finish();
+    samples.finish();
+    samples.commit();
+    points.commit();
 }
 
 }  // namespace ballbar::storage

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -14,6 +15,7 @@
 #include <thread>
 
 #include "ballbar/storage/sample_writer.hpp"
+#include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
 #include "test_util.hpp"
 
@@ -362,6 +364,62 @@ TEST(Reliability, ReaderReadsWhileAWriterWrites) {
     EXPECT_GT(partial, 0) << "the reader saw the session while it was being written";
     EXPECT_EQ(reader.sample_count(id), 60'000);
     EXPECT_EQ(reader.session(id).state, SessionState::completed);
+}
+
+/// Issue 24: a CSV export that hit a full disk left a new points.csv beside the old samples.csv. The
+/// disk fills (a file-size limit, EFBIG, in a child process) while samples.csv is written: the
+/// directory keeps the earlier export's two files, whole, and no temporary file.
+TEST(Reliability, ACsvExportThatRunsOutOfSpaceLeavesTheEarlierExportWhole) {
+    TempDir dir;
+    const auto path = dir.file("e.db");
+    std::int64_t small = 0;
+    std::int64_t large = 0;
+    {
+        Store store(path);
+        for (const int n : {10, 40000}) {
+            NewSession ns;
+            ns.machine = test::tttrr();
+            const auto id = store.create_session(ns);
+            store.start_session(id);
+            {
+                SampleWriter w(store, id);
+                for (int i = 0; i < n; ++i) w.append({0, static_cast<std::uint64_t>(i) * 1000, i * 7 + n, 0, 20.0f});
+            }
+            store.finish_session(id);
+            (n == 10 ? small : large) = id;
+        }
+        export_csv(store, small, dir.path() / "out");
+    }
+    // The earlier export, told apart from any new one.
+    std::ofstream(dir.file("out/points.csv"), std::ios::app) << "0,earlier export\n";
+    std::ofstream(dir.file("out/samples.csv"), std::ios::app) << "0,earlier export\n";
+    const auto points = slurp(dir.file("out/points.csv"));
+    const auto samples = slurp(dir.file("out/samples.csv"));
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        ::signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails with EFBIG, as on a full disk
+        const rlimit lim{200 * 1024, 200 * 1024};
+        ::setrlimit(RLIMIT_FSIZE, &lim);
+        try {
+            StoreOptions o;
+            o.recover = false;
+            Store store(path, o);
+            export_csv(store, large, dir.path() / "out");  // samples.csv: about 1 MB
+        } catch (const std::exception&) {
+            ::_exit(0);  // refused, as it must be
+        }
+        ::_exit(1);
+    }
+    int st = 0;
+    ::waitpid(pid, &st, 0);
+    ASSERT_TRUE(WIFEXITED(st));
+    EXPECT_EQ(WEXITSTATUS(st), 0) << "the export past the limit did not fail";
+    EXPECT_EQ(slurp(dir.file("out/points.csv")), points) << "a new points.csv beside the old samples.csv";
+    EXPECT_EQ(slurp(dir.file("out/samples.csv")), samples);
+    std::size_t files = 0;
+    for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir.path() / "out")) ++files;
+    EXPECT_EQ(files, 2u) << "a temporary file was left behind";
 }
 
 }  // namespace

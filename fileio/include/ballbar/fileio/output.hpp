@@ -47,6 +47,10 @@ class OutputFile {
     const std::string& path() const { return path_; }
     /// Appends bytes. Throws FileError(failed) (disk full…).
     void write(std::string_view bytes);
+    /// The first half of commit(): the temporary file flushed to disk and closed, the target still
+    /// untouched. For outputs that must all be whole before any is made visible (finish each, then
+    /// commit each: the renames cannot fail for want of space). Throws FileError(failed).
+    void finish();
     /// Makes the output visible: flush, fsync, rename the temporary file over the target.
     void commit();
 
@@ -63,6 +67,8 @@ class OutputFile {
 class OutputStream : public std::ostream {
   public:
     OutputStream(std::string path, std::string option, const std::vector<Protected>& inputs = {});
+    /// OutputFile::finish(), after the buffer.
+    void finish();
     void commit();
 
   private:
