@@ -95,6 +95,8 @@ json summary_json(const ba::FitSummary& fit) {
     j["degrees_of_freedom"] = fit.degrees_of_freedom;
     j["residual_rms_um"] = fit.residual_rms_mm * 1e3;
     j["residual_sigma_um"] = fit.residual_sigma_mm * 1e3;
+    j["noise_floor_um"] = fit.noise_floor_mm * 1e3;
+    j["uncertainty_from_noise_floor"] = fit.uncertainty_from_floor;
     j["initial_rms_um"] = fit.initial_rms_mm * 1e3;
     j["estimates"] = json::array();
     for (const auto& e : fit.estimates) {
@@ -166,7 +168,9 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     try {
         fit = ba::fit_error_model(readings, fo);
     } catch (const ba::AnalysisError& e) {
-        throw CliError(kExitUsage, std::string("identification: ") + e.what());
+        // Valid readings that cannot support the fit (too few for the unknowns): the operation failed,
+        // as in `discover`.
+        throw CliError(kExitFailure, std::string("identification failed: ") + e.what());
     }
 
     json out = summary_json(fit);

@@ -68,6 +68,13 @@ std::string fit_report(const ba::FitSummary& fit) {
                   fit.converged ? "converged" : "NOT converged", fit.iterations, fit.message.c_str(), fit.readings,
                   fit.residual_rms_mm * 1e3, fit.initial_rms_mm * 1e3);
     os << line;
+    if (fit.uncertainty_from_floor) {
+        std::snprintf(line, sizeof line,
+                      "  the residual (σ %.4f µm) is below the readings' own noise (%.4f µm): the uncertainties "
+                      "assume the latter\n",
+                      fit.residual_sigma_mm * 1e3, fit.noise_floor_mm * 1e3);
+        os << line;
+    }
     for (const auto& e : fit.estimates) {
         const ScreenUnit u = e.param ? screen_unit(ba::param_info(*e.param).unit) : ScreenUnit{1e3, "µm"};
         if (e.observable) {

@@ -142,7 +142,8 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     sink.finish(sum);
     if (sum.final_state != acq::State::Done)
         throw CliError(kExitFailure, "demo session " + std::to_string(id) + " ended " +
-                                         std::string(acq::to_string(sum.final_state)) + ": " + sum.reason);
+                                         std::string(storage::to_string(store.session(id).state)) + ": " +
+                                         sum.reason);  // as stored (interrupted, aborted, failed)
 
     const auto truth = acq::true_values(plan, setup.errors);
     json out;

@@ -390,8 +390,22 @@ FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
     // Uncertainties from the residual variance and the (scaled) normal matrix at the solution.
     out.degrees_of_freedom = out.readings - static_cast<std::size_t>(m);
     out.residual_rms_mm = std::sqrt(cost / static_cast<double>(out.readings));
-    const double sigma2 = cost / static_cast<double>(out.degrees_of_freedom);
-    out.residual_sigma_mm = std::sqrt(sigma2);
+    out.residual_sigma_mm = std::sqrt(cost / static_cast<double>(out.degrees_of_freedom));
+    {
+        double sum = 0;
+        std::size_t given = 0;
+        for (const Reading& rd : readings.readings) {
+            if (rd.std_mm && rd.n > 0 && std::isfinite(*rd.std_mm)) {
+                sum += *rd.std_mm * *rd.std_mm / rd.n;
+                ++given;
+            }
+        }
+        const double stated = given > 0 ? std::sqrt(sum / static_cast<double>(given)) : 0.0;
+        out.noise_floor_mm = std::max(stated, opt.min_reading_sigma_mm);
+    }
+    out.uncertainty_from_floor = out.residual_sigma_mm < out.noise_floor_mm;
+    const double sigma2 = out.uncertainty_from_floor ? out.noise_floor_mm * out.noise_floor_mm
+                                                     : out.residual_sigma_mm * out.residual_sigma_mm;
     out.correlation = Eigen::MatrixXd::Identity(m, m);
     if (m > 0) {
         const Eigen::MatrixXd ainv = a.ldlt().solve(Eigen::MatrixXd::Identity(m, m));

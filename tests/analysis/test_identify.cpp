@@ -128,6 +128,48 @@ TEST(Identify, NoiseFreeDataIsRecoveredExactlyForEveryType) {
     }
 }
 
+// Issue 24: readings that agree to round-off fit with no residual; the uncertainties then rest on the
+// readings' own stated noise (std_mm/√n), never on round-off ("± 0.000000000001 µm"). With real noise
+// above that floor, the residual's σ is used as before.
+TEST(Identify, UncertaintiesNeverRestOnRoundOffButOnTheReadingsOwnNoise) {
+    const MachineGeometry g = test_machine(MachineType::TTTRR);
+    const IdentificationPlan plan = plan_for(g, rotary_params_for(MachineType::TTTRR));
+    const std::vector<Param> params = reachable(plan);
+    std::mt19937_64 rng(11);
+    Simulated exact = simulate(g, plan, params, 0.0, rng);
+    for (auto& rd : exact.readings.readings) {
+        rd.std_mm = 0.5e-3;  // 0.5 µm scatter in a window of 100 samples: 0.05 µm for the mean
+        rd.n = 100;
+    }
+    FitOptions fo;
+    fo.free_params = params;
+    const FitSummary fit = fit_error_model(exact.readings, fo);
+    EXPECT_TRUE(fit.uncertainty_from_floor);
+    EXPECT_NEAR(fit.noise_floor_mm, 0.05e-3, 1e-12);
+    EXPECT_LT(fit.residual_sigma_mm, 1e-9);
+    // The same readings with 0.05 µm of noise give uncertainties of the same size.
+    std::mt19937_64 rng2(11);
+    Simulated noisy = simulate(g, plan, params, 0.05e-3, rng2);
+    const FitSummary with_noise = fit_error_model(noisy.readings, fo);
+    for (const Param p : params) {
+        const ParamEstimate* e = fit.find(param_info(p).name);
+        const ParamEstimate* n = with_noise.find(param_info(p).name);
+        ASSERT_TRUE(e && n);
+        EXPECT_GT(e->std, 0.5 * n->std) << e->name;
+        EXPECT_LT(e->std, 2.0 * n->std) << e->name;
+    }
+    // Without stated noise, the floor is the 1 nm storage step.
+    for (auto& rd : exact.readings.readings) rd.std_mm.reset();
+    const FitSummary bare = fit_error_model(exact.readings, fo);
+    EXPECT_DOUBLE_EQ(bare.noise_floor_mm, 1e-6);
+    for (const auto& e : bare.estimates) {
+        if (e.observable) {
+            EXPECT_GT(e.std, 1e-9) << e.name;
+        }
+    }
+    EXPECT_FALSE(with_noise.uncertainty_from_floor);
+}
+
 // Over many random machines, estimates fall within 3 standard uncertainties of the truth (normalised
 // errors are ~N(0,1): we ask for ≥ 98 % within 3σ, none beyond 5σ and an RMS of the normalised errors
 // near 1, which also checks that the reported uncertainties are honest).

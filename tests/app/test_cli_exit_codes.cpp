@@ -101,6 +101,9 @@ TEST(CliExitCodes, EveryRefusedCommandLineExits2AndCreatesNoDatabase) {
         {"identify --params bogus " + data("readings/rrttt_minimal.csv"), 2, "unknown parameter 'bogus'"},
         {"discover nonexist.readings", 2, "no such file: nonexist.readings"},
         {"discover 1", 2, "no database at"},
+        // Valid readings, too few for the unknowns: the same failure, the same code, in both.
+        {"identify " + data("readings/rrttt_minimal.csv"), 1, "more readings than unknowns"},
+        {"discover " + data("readings/rrttt_minimal.csv"), 1, "more readings than unknowns"},
         {"compensate --model 1 --program " + d.file("prog.nc") + " --out o.nc", 2, "no database at", {"o.nc"}},
         {"compensate --model missing-model --program " + d.file("prog.nc") + " --out o.nc",
          2,

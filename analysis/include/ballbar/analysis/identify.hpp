@@ -44,6 +44,9 @@ struct FitOptions {
     /// noise (root-sum-square over readings of the change ≤ step_tolerance · σ): parameter steps of
     /// about this fraction of their standard uncertainty or less.
     double step_tolerance = 1e-2;
+    /// The least reading noise the uncertainties assume (see FitSummary::noise_floor_mm): the 1 nm step
+    /// in which displacements are stored.
+    double min_reading_sigma_mm = 1e-6;
 
     /// Empty when valid, else what is wrong (a Param listed twice, limits out of range).
     std::string validate() const;
@@ -81,7 +84,13 @@ struct FitSummary {
     Eigen::MatrixXd correlation;
     double residual_rms_mm = 0;    ///< sqrt(Σr²/readings)
     double residual_sigma_mm = 0;  ///< sqrt(Σr²/degrees of freedom): the estimated reading noise
-    double initial_rms_mm = 0;     ///< RMS of measured − predicted at the start values
+    /// The least reading noise the readings allow: the RMS of each reading's own standard uncertainty
+    /// (std_mm/√n, where given), and never below FitOptions::min_reading_sigma_mm. Uncertainties use
+    /// max(residual_sigma_mm, this): readings that agree to round-off (copies, a simulation without
+    /// noise) fit with no residual, which is no evidence of a parameter known to 1e-12 µm.
+    double noise_floor_mm = 0;
+    bool uncertainty_from_floor = false;  ///< residual_sigma_mm was below noise_floor_mm
+    double initial_rms_mm = 0;            ///< RMS of measured − predicted at the start values
     std::size_t readings = 0;
     std::size_t degrees_of_freedom = 0;  ///< readings − fitted unknowns
     ErrorParams model{};                 ///< fixed values with the estimates written in
