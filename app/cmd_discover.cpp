@@ -356,10 +356,10 @@ int run_discover(const DiscoverOptions& o, const Globals& globals) {
     mallopt(M_MMAP_THRESHOLD, 512 << 20);
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
     std::unique_ptr<storage::Store> store;
-    const Inputs in = load_inputs(o, globals, store);
+    Inputs in = load_inputs(o, globals, store);
     ba::ReadingSet set;
     try {
-        set = in.sets.size() == 1 ? in.sets.front() : ba::merge_readings(in.sets);
+        set = ba::merge_readings(std::move(in.sets));  // moved: the readings are held once
     } catch (const ba::AnalysisError& e) {
         throw CliError(kExitUsage, std::string("cannot combine the inputs: ") + e.what());
     }

@@ -158,7 +158,7 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     }
     ba::ReadingSet readings;
     try {
-        readings = ba::merge_readings(sets);
+        readings = ba::merge_readings(std::move(sets));
     } catch (const ba::AnalysisError& e) {
         throw CliError(kExitUsage, e.what());
     }

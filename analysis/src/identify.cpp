@@ -94,6 +94,26 @@ ReadingSet merge_readings(std::span<const ReadingSet> sets) {
     return out;
 }
 
+ReadingSet merge_readings(std::vector<ReadingSet>&& sets) {
+    if (sets.empty()) throw AnalysisError("no readings to merge");
+    for (const auto& s : sets) {
+        if (s.machine.type != sets.front().machine.type)
+            throw AnalysisError("cannot merge readings of a " + std::string(to_string(s.machine.type)) +
+                                " machine with readings of a " + std::string(to_string(sets.front().machine.type)) +
+                                " machine");
+    }
+    ReadingSet out = std::move(sets.front());
+    std::size_t total = 0;
+    for (const auto& s : sets) total += s.readings.size();
+    out.readings.reserve(total);
+    for (std::size_t k = 1; k < sets.size(); ++k) {
+        out.readings.insert(out.readings.end(), sets[k].readings.begin(), sets[k].readings.end());
+        std::vector<Reading>().swap(sets[k].readings);  // freed as it goes
+    }
+    sets.clear();
+    return out;
+}
+
 ReadingConditions conditions_of(const Reading& r) {
     return {r.time_s, r.bar_temp_C.value_or(20.0)};
 }
@@ -293,20 +313,24 @@ FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
     // once per evaluation, not per iteration (the n × m product is most of an iteration's cost).
     Eigen::VectorXd scale;
     Eigen::MatrixXd js, a;
-    auto set_jacobian = [&](const Eigen::MatrixXd& jac) {
+    // Scaled in place and kept as js: at most two n × m matrices live at once (the evaluated Jacobian
+    // and its selected columns), 200 MB each for 2 M readings (docs/identification.md, memory).
+    auto set_jacobian = [&](Eigen::MatrixXd jac) {
         scale = jac.colwise().norm().transpose();
         for (Eigen::Index k = 0; k < m; ++k)
             if (!(scale[k] > 0)) scale[k] = 1;
-        js = jac * scale.cwiseInverse().asDiagonal();
+        for (Eigen::Index k = 0; k < m; ++k) jac.col(k) /= scale[k];
+        js = std::move(jac);
         a = js.transpose() * js;
     };
     set_jacobian(select(jac_full));
-    jac_full.resize(0, 0);
+    jac_full = Eigen::MatrixXd();
     out.jacobian_evaluations = 1;
     bool jac_current = true;  // evaluated at the current estimate
     double lambda = 1e-6;
     out.message = "iteration limit reached";
     auto refresh = [&] {
+        js = Eigen::MatrixXd();  // freed before the new one is evaluated
         set_jacobian(select(jacobian(readings, prep, e, opt.free_params, offsets, opt.fit_socket_offsets)));
         jac_current = true;
         ++out.jacobian_evaluations;

@@ -130,9 +130,16 @@ std::string read_whole(const std::string& path, std::string_view what, std::size
     return read_whole(f, max_bytes);
 }
 
-void check_json_nesting(std::string_view text, std::string_view what, int max_depth) {
+void check_json_nesting(std::string_view text, std::string_view what, int max_depth, std::size_t max_values) {
     int depth = 0;
     bool in_string = false, escaped = false;
+    std::size_t values = 1;  // the top-level one; each ',' and each '[' or '{' adds one (an upper bound)
+    auto count = [&](std::size_t i) {
+        if (++values > max_values)
+            throw FileError(FileError::Kind::refused, std::string(what) + ": JSON with more than " +
+                                                          std::to_string(max_values) + " values (at byte " +
+                                                          std::to_string(i + 1) + ")");
+    };
     for (std::size_t i = 0; i < text.size(); ++i) {
         const char c = text[i];
         if (in_string) {
@@ -144,7 +151,10 @@ void check_json_nesting(std::string_view text, std::string_view what, int max_de
                 in_string = false;
         } else if (c == '"') {
             in_string = true;
+        } else if (c == ',') {
+            count(i);
         } else if (c == '[' || c == '{') {
+            count(i);
             if (++depth > max_depth)
                 throw FileError(FileError::Kind::refused, std::string(what) + ": JSON nested deeper than " +
                                                               std::to_string(max_depth) + " levels (at byte " +

@@ -151,6 +151,18 @@ TEST(FileioInput, JsonNestedDeeperThanTheLimitIsRefusedBeforeParsing) {
     EXPECT_NO_THROW(check_json_nesting(R"({"a": ")" + std::string(1000, '[') + R"(\"[", "b": [[1]]})", "x"));
     EXPECT_NO_THROW(check_json_nesting(std::string(1000, ']'), "x")) << "not JSON, but not deep: the parser says";
     EXPECT_THROW(check_json_nesting(std::string(16u << 20, '['), "plan"), FileError);
+    // Flat, but too many values: 16 MiB of "0," parsed to 418 MB; refused before parsing.
+    std::string flat = "[";
+    for (int i = 0; i < 2'000'000; ++i) flat += "0,";
+    flat += "0]";
+    try {
+        check_json_nesting(flat, "machine file");
+        ADD_FAILURE() << "2,000,001 values were not refused";
+    } catch (const FileError& e) {
+        EXPECT_NE(std::string(e.what()).find("more than 2000000 values"), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(check_json_nesting(R"({"a": [1, 2, 3], "b": "x,y,[z"})", "x", kMaxJsonDepth, 6));
+    EXPECT_THROW(check_json_nesting(R"({"a": [1, 2, 3], "b": "x,y,[z"})", "x", kMaxJsonDepth, 5), FileError);
 }
 
 }  // namespace

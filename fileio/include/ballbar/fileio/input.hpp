@@ -85,11 +85,16 @@ std::string read_whole(const std::string& path, std::string_view what, std::size
 /// The deepest nesting of arrays and objects any of the project's JSON formats has is a handful of
 /// levels; a parser building a document of 16 MiB of "[" spent 1.27 GB before it failed.
 inline constexpr int kMaxJsonDepth = 64;
+/// The most values (numbers, strings, arrays, objects, …) a JSON input may hold. A parsed value costs
+/// about 52 bytes: 16 MiB of "0," (8 M values) took 418 MB; 2 M values stay within about 110 MB, and
+/// the largest input the project's formats need (a plan of 10,000 points) has about 150,000.
+inline constexpr std::size_t kMaxJsonValues = 2'000'000;
 
 /// Refuses (FileError refused, naming `what` and the byte) JSON text whose arrays and objects nest
-/// deeper than `max_depth`, by one pass over the bytes (strings skipped) and no allocation: called on
-/// every JSON input before it is parsed.
-void check_json_nesting(std::string_view text, std::string_view what, int max_depth = kMaxJsonDepth);
+/// deeper than `max_depth`, or that holds more than `max_values` values, by one pass over the bytes
+/// (strings skipped) and no allocation: called on every JSON input before it is parsed.
+void check_json_nesting(std::string_view text, std::string_view what, int max_depth = kMaxJsonDepth,
+                        std::size_t max_values = kMaxJsonValues);
 
 /// read_whole of a JSON input (at most kMaxJsonBytes) with its nesting checked.
 std::string read_json(const std::string& path, std::string_view what);
