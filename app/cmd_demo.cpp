@@ -180,10 +180,10 @@ device::FaultConfig parse_faults(const std::string& spec) {
 json angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType type, acq::TestKind kind) {
     if (!e) return nullptr;
     json j = json::object();
-    const bool rtttr = type == ba::MachineType::RTTTR;
-    if (!rtttr || kind == acq::TestKind::TableAlpha) j["d_alpha"] = e->d_alpha_rad;
-    if (type == ba::MachineType::RRTTT || (rtttr && kind == acq::TestKind::SpindleBeta)) j["d_beta"] = e->d_beta_rad;
-    if (type == ba::MachineType::TTTRR) j["d_gamma"] = e->d_gamma_rad;
+    const ba::MeasuredAngles angles = acq::measured_angles(type, kind);
+    if (angles.alpha) j["d_alpha"] = e->d_alpha_rad;
+    if (angles.beta) j["d_beta"] = e->d_beta_rad;
+    if (angles.gamma) j["d_gamma"] = e->d_gamma_rad;
     return j;
 }
 

@@ -73,14 +73,11 @@ void print_results(std::ostream& out, const acq::Plan& plan, const acq::SessionS
             os << "  " << name << " " << ba::rad_to_arcsec(v) << "″";
             if (sd) os << " ± " << ba::rad_to_arcsec(*sd) << "″";
         };
-        const bool rtttr = type == ba::MachineType::RTTTR;
+        const ba::MeasuredAngles angles = acq::measured_angles(type, t.kind);
         os << "  orientation (exact):";
-        if (!rtttr || t.kind == acq::TestKind::TableAlpha)
-            ang("Δα", e.d_alpha_rad, t.std_rad ? std::optional(t.std_rad->d_alpha_rad) : std::nullopt);
-        if (type == ba::MachineType::RRTTT || (rtttr && t.kind == acq::TestKind::SpindleBeta))
-            ang("Δβ", e.d_beta_rad, t.std_rad ? std::optional(t.std_rad->d_beta_rad) : std::nullopt);
-        if (type == ba::MachineType::TTTRR)
-            ang("Δγ", e.d_gamma_rad, t.std_rad ? std::optional(t.std_rad->d_gamma_rad) : std::nullopt);
+        if (angles.alpha) ang("Δα", e.d_alpha_rad, t.std_rad ? std::optional(t.std_rad->d_alpha_rad) : std::nullopt);
+        if (angles.beta) ang("Δβ", e.d_beta_rad, t.std_rad ? std::optional(t.std_rad->d_beta_rad) : std::nullopt);
+        if (angles.gamma) ang("Δγ", e.d_gamma_rad, t.std_rad ? std::optional(t.std_rad->d_gamma_rad) : std::nullopt);
         out << os.str() << "\n";
     }
 }

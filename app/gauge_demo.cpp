@@ -173,10 +173,8 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
         const double da = std::abs(m->d_alpha_rad - t->d_alpha_rad), db = std::abs(m->d_beta_rad - t->d_beta_rad),
                      dg = std::abs(m->d_gamma_rad - t->d_gamma_rad);
         // Only the angles the test observes (as the plain demo prints them).
-        double d = 0;
-        if (*type == ba::MachineType::TTTRR) d = std::max(da, dg);
-        if (*type == ba::MachineType::RRTTT) d = std::max(da, db);
-        if (*type == ba::MachineType::RTTTR) d = r.kind == acq::TestKind::TableAlpha ? da : db;
+        const ba::MeasuredAngles angles = acq::measured_angles(*type, r.kind);
+        const double d = std::max({angles.alpha ? da : 0.0, angles.beta ? db : 0.0, angles.gamma ? dg : 0.0});
         worst_arcsec = std::max(worst_arcsec, ba::rad_to_arcsec(d));
         out["orientation"].push_back({{"test", r.test + 1},
                                       {"kind", std::string(acq::to_string(r.kind))},

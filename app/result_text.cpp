@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ballbar/analysis/error_params.hpp"
+#include "ballbar/analysis/orientation.hpp"
 #include "figures.hpp"
 
 namespace ballbar::app {
@@ -64,11 +65,11 @@ std::vector<std::string> orientation_lines(const json& j, ba::MachineType machin
     std::string line = "test " + std::to_string(j.value("test", -1) + 1) + " (" + kind + "):";
     if (!j.contains("exact") || !j["exact"].is_object())
         return {line + " orientation singular" + (j.contains("singular") ? ": " + j.value("singular", "") : "")};
-    const bool rtttr = machine == ba::MachineType::RTTTR;
+    const ba::MeasuredAngles measured = ba::measured_angles(machine, kind == "SpindleBeta");
     std::vector<std::pair<const char*, const char*>> angles;  // (key, symbol) the test measures
-    if (!rtttr || kind == "TableAlpha") angles.push_back({"d_alpha_rad", "Δα"});
-    if (machine == ba::MachineType::RRTTT || (rtttr && kind == "SpindleBeta")) angles.push_back({"d_beta_rad", "Δβ"});
-    if (machine == ba::MachineType::TTTRR) angles.push_back({"d_gamma_rad", "Δγ"});
+    if (measured.alpha) angles.push_back({"d_alpha_rad", "Δα"});
+    if (measured.beta) angles.push_back({"d_beta_rad", "Δβ"});
+    if (measured.gamma) angles.push_back({"d_gamma_rad", "Δγ"});
     const json& e = j["exact"];
     const json* s = j.contains("std") && j["std"].is_object() ? &j["std"] : nullptr;
     for (const auto& [key, symbol] : angles) {

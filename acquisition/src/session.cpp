@@ -585,12 +585,11 @@ bool Session::review() {
                 os << "; " << name << " " << fmt(rad_to_arcsec(v), 2) << "″";
                 if (sd) os << " ± " << fmt(rad_to_arcsec(*sd), 2) << "″";
             };
-            const bool rtttr = type == MachineType::RTTTR;
-            if (!rtttr || t.kind == TestKind::TableAlpha)
+            const analysis::MeasuredAngles angles = measured_angles(type, t.kind);
+            if (angles.alpha)
                 ang("Δα", e.d_alpha_rad, t.std_rad ? std::optional(t.std_rad->d_alpha_rad) : std::nullopt);
-            if (type == MachineType::RRTTT || (rtttr && t.kind == TestKind::SpindleBeta))
-                ang("Δβ", e.d_beta_rad, t.std_rad ? std::optional(t.std_rad->d_beta_rad) : std::nullopt);
-            if (type == MachineType::TTTRR)
+            if (angles.beta) ang("Δβ", e.d_beta_rad, t.std_rad ? std::optional(t.std_rad->d_beta_rad) : std::nullopt);
+            if (angles.gamma)
                 ang("Δγ", e.d_gamma_rad, t.std_rad ? std::optional(t.std_rad->d_gamma_rad) : std::nullopt);
         } else {
             os << "; orientation: " << t.orientation.singular;

@@ -46,6 +46,18 @@ double head_residual(double a, double b, double z_r, const Vec3& w) {
 
 }  // namespace
 
+MeasuredAngles measured_angles(MachineType type, bool rtttr_spindle_test) {
+    switch (type) {
+        case MachineType::RRTTT:
+            return {true, true, false};
+        case MachineType::TTTRR:
+            return {true, false, true};
+        case MachineType::RTTTR:
+            return rtttr_spindle_test ? MeasuredAngles{false, true, false} : MeasuredAngles{true, false, false};
+    }
+    return {};
+}
+
 OrientationSolution solve_orientation(const RrtttInput& in) {
     require_finite(in.pivot_mm.allFinite() && std::isfinite(in.z_r_mm) && std::isfinite(in.alpha_rad) &&
                        std::isfinite(in.beta_rad) && in.dV1_mm.allFinite() && in.dV2_mm.allFinite(),

@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/types.hpp"
 #include "circular.hpp"
 
@@ -112,16 +113,10 @@ void add_orientation(Report& r, std::string_view kind, const json& p) {
     std::vector<Angle> angles;
     const Angle alpha{"Δα", "A", "d_alpha_rad", "alpha_rad"}, beta{"Δβ", "B", "d_beta_rad", "beta_rad"},
         gamma{"Δγ", "C", "d_gamma_rad", "gamma_rad"};
-    if (type == analysis::MachineType::RRTTT)
-        angles = {alpha, beta};
-    else if (type == analysis::MachineType::TTTRR)
-        angles = {alpha, gamma};
-    else if (test_kind == "SpindleBeta")
-        angles = {beta};
-    else if (test_kind == "TableAlpha")
-        angles = {alpha};
-    else
-        angles = {alpha, beta};
+    const analysis::MeasuredAngles measured = analysis::measured_angles(type, test_kind == "SpindleBeta");
+    if (measured.alpha) angles.push_back(alpha);
+    if (measured.beta) angles.push_back(beta);
+    if (measured.gamma) angles.push_back(gamma);
     for (const auto& a : angles) {
         OrientationError o;
         o.symbol = a.symbol;

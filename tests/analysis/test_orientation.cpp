@@ -44,6 +44,16 @@ void expect_all_finite(const ba::OrientationSolution& s) {
 
 }  // namespace
 
+TEST(Orientation, EachTestDeterminesTheAnglesOfItsType) {
+    const auto is = [](ba::MeasuredAngles m, bool a, bool b, bool g) {
+        return m.alpha == a && m.beta == b && m.gamma == g;
+    };
+    EXPECT_TRUE(is(ba::measured_angles(ba::MachineType::RRTTT, false), true, true, false));
+    EXPECT_TRUE(is(ba::measured_angles(ba::MachineType::TTTRR, false), true, false, true));
+    EXPECT_TRUE(is(ba::measured_angles(ba::MachineType::RTTTR, true), false, true, false));   // spindle: B
+    EXPECT_TRUE(is(ba::measured_angles(ba::MachineType::RTTTR, false), true, false, false));  // table (or both): A
+}
+
 TEST(Orientation, Table1AllFiveCasesFirstOrderAndExact) {
     const auto table = load_table1();
     ASSERT_EQ(table.size(), 5u);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 
+#include "ballbar/analysis/orientation.hpp"
 #include "ballbar/report/build.hpp"
 #include "poppler.hpp"
 #include "store_fixture.hpp"
@@ -84,6 +85,24 @@ TEST(BuildReport, RtttrTestsGiveOnlyTheirOwnAngle) {
     ASSERT_EQ(r.orientation.size(), 2u);
     EXPECT_EQ(r.orientation[0].symbol, "Δβ");  // test 0: spindle set-up
     EXPECT_EQ(r.orientation[1].symbol, "Δα");  // test 1: table set-up
+}
+
+/// Issue 25: "which angles a test measures" had six copies, and for an RTTTR test stored with both axes
+/// the report showed Δα and Δβ, the gauge demo Δβ and `measure` nothing; the solver determines Δα
+/// (it takes every RTTTR test that is not a spindle test as a table test). One rule now: Δα.
+TEST(BuildReport, AnRtttrTestStoredWithBothAxesGivesTheAngleTheSolverDetermines) {
+    TempDir dir;
+    storage::Store store((dir.path / "b.db").string(), fast());
+    const auto stored = testing::store_synthetic_session(store, analysis::MachineType::RTTTR, 3000, 2);
+    nlohmann::json o = stored.orientation[0];
+    o["kind"] = "BothAxes";
+    o["test"] = 2;
+    store.add_result(stored.id, "orientation", o.dump());
+    const Report r = build_report(store, stored.id);
+    ASSERT_EQ(r.orientation.size(), 3u);
+    EXPECT_EQ(r.orientation[0].symbol, "Δβ");  // the fixture's spindle test
+    EXPECT_EQ(r.orientation[1].symbol, "Δα");  // its table test
+    EXPECT_EQ(r.orientation[2].symbol, "Δα");  // both axes: what the solver determines
 }
 
 TEST(BuildReport, MalformedResultIsNamed) {

@@ -11,6 +11,7 @@
 
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/analysis/layout.hpp"
+#include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/types.hpp"
 
 namespace ballbar::acquisition {
@@ -22,6 +23,10 @@ enum class TestKind {
     TableAlpha,   ///< RTTTR: the table turns about A, socket on the turning table: Δα
 };
 std::string_view to_string(TestKind kind);
+/// The angles a test of `kind` on a machine of `type` determines (analysis::measured_angles).
+inline analysis::MeasuredAngles measured_angles(analysis::MachineType type, TestKind kind) {
+    return analysis::measured_angles(type, kind == TestKind::SpindleBeta);
+}
 
 /// One two-step test: step 1 at the rotary start (0, 0), step 2 after the rotation pair.
 struct TestSpec {

@@ -26,6 +26,17 @@ struct OrientationErrors {
     double d_gamma_rad = 0;
 };
 
+/// Which of Δα, Δβ, Δγ one two-step test determines — the one rule every screen, JSON output and
+/// report follows: an RRTTT test Δα and Δβ (the head's A and B), a TTTRR test Δα and Δγ (the table's A
+/// and C), an RTTTR test Δβ when it turns the spindle's B and Δα otherwise (the table's A; the solver
+/// takes every RTTTR test that is not a spindle test as a table test).
+struct MeasuredAngles {
+    bool alpha = false;
+    bool beta = false;
+    bool gamma = false;
+};
+MeasuredAngles measured_angles(MachineType type, bool rtttr_spindle_test);
+
 struct OrientationSolution {
     std::optional<OrientationErrors> first_order;  ///< the corrected seed formulas; empty if singular
     std::optional<OrientationErrors> exact;        ///< exact inversion of the model; empty if singular
