@@ -92,6 +92,33 @@ void print_segments(storage::Store& store, std::int64_t id, std::ostream& out) {
     }
 }
 
+/// The stream's gaps (schema v6): how many, how long in all, and the first few.
+void print_gaps(storage::Store& store, std::int64_t id, std::ostream& out) {
+    const auto gaps = store.sample_gaps(id);
+    if (gaps.empty()) {
+        out << "  gaps        none recorded\n";
+        return;
+    }
+    double total_s = 0;
+    for (const auto& g : gaps) total_s += g.duration_s.value_or(0);
+    char line[160];
+    std::snprintf(line, sizeof line, "  gaps        %zu in the stream, %.3f s in all (samples the host lost)\n",
+                  gaps.size(), total_s);
+    out << line;
+    constexpr std::size_t kShown = 10;
+    for (std::size_t i = 0; i < gaps.size() && i < kShown; ++i) {
+        const auto& g = gaps[i];
+        if (g.duration_s)
+            std::snprintf(line, sizeof line, "    before sample %llu: %.3f s, %s\n",
+                          static_cast<unsigned long long>(g.before_seq), *g.duration_s, g.cause.c_str());
+        else
+            std::snprintf(line, sizeof line, "    before sample %llu: %s (the instrument's clock restarted)\n",
+                          static_cast<unsigned long long>(g.before_seq), g.cause.c_str());
+        out << line;
+    }
+    if (gaps.size() > kShown) out << "    … " << gaps.size() - kShown << " more: sessions show " << id << " --json\n";
+}
+
 int show_session(const SessionsOptions& o, const Globals& globals, std::ostream& out) {
     auto store = open_reader(globals);
     note_database_damage(store.damage());
@@ -144,6 +171,7 @@ int show_session(const SessionsOptions& o, const Globals& globals, std::ostream&
     }
     out << '\n';
     print_segments(store, id, out);
+    print_gaps(store, id, out);
     out << "  points      " << s.point_count << '\n';
     for (const auto& p : store.points(id)) {
         const auto& rd = p.reading;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "ballbar/analysis/types.hpp"
 #include "format.hpp"
@@ -35,7 +36,13 @@ void figure_trace(Document& doc, const Report& r) {
     std::vector<std::pair<double, double>> spans;
     for (const auto& c : r.captures) spans.emplace_back(c.start_s * k, c.end_s * k);
     if (!spans.empty()) p.bands("capture windows (" + std::to_string(spans.size()) + ")", spans, palette(1));
-    p.line("bar reading (" + std::to_string(t.samples) + " samples, min/max per column)", std::move(x),
+    std::string gaps = "no gap";
+    if (t.gaps > 0) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%zu gap%s in the stream, %.3f s", t.gaps, t.gaps == 1 ? "" : "s", t.gap_s);
+        gaps = buf;
+    }
+    p.line("bar reading (" + std::to_string(t.samples) + " samples, " + gaps + ", min/max per column)", std::move(x),
            t.displacement_um, palette(0), 0.5);
     if (t.time_s.empty()) p.note("no samples stored");
     p.draw(doc.cr(), doc.reserve(190));

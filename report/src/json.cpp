@@ -165,7 +165,8 @@ nlohmann::json to_json(const Report& r) {
                        {"from_location", o.from_location},
                        {"to_location", o.to_location}});
 
-    j["bar_trace"] = {{"samples", r.trace.samples},     {"min_um", opt(r.trace.min_um)},
+    j["bar_trace"] = {{"samples", r.trace.samples},     {"gaps", r.trace.gaps},
+                      {"gap_s", r.trace.gap_s},         {"min_um", opt(r.trace.min_um)},
                       {"max_um", opt(r.trace.max_um)},  {"decimation", "first/min/max/last per column"},
                       {"time_s", nums(r.trace.time_s)}, {"displacement_um", nums(r.trace.displacement_um)}};
 

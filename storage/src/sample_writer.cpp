@@ -40,8 +40,27 @@ SampleWriter::~SampleWriter() {
     }
 }
 
-std::uint64_t SampleWriter::append(const analysis::BarSample& sample) {
+std::uint64_t SampleWriter::append(const analysis::BarSample& in) {
     const std::uint64_t seq = next_seq_++;
+    analysis::BarSample sample = in;
+    // A gap: the driver's flag, or the source's numbering jumped (a source leaves a hole where it lost
+    // samples; a resume or a reconnect that restarts the numbering is no jump).
+    const bool jumped = last_source_seq_ && sample.seq > *last_source_seq_ + 1;
+    if (!pending_.empty() || committed_ > 0) {
+        if ((sample.flags & analysis::kSampleAfterGap) || jumped) {
+            SampleGap g;
+            g.before_seq = seq;
+            const bool clock_went_back = sample.device_time_us < last_device_time_us_;
+            if (!clock_went_back)
+                g.duration_s = 1e-6 * static_cast<double>(sample.device_time_us - last_device_time_us_);
+            g.cause = clock_went_back ? "reconnect" : "lost frames";
+            pending_gaps_.push_back(std::move(g));
+            sample.flags = static_cast<std::uint16_t>(sample.flags | analysis::kSampleAfterGap);
+        }
+    } else {
+        sample.flags = static_cast<std::uint16_t>(sample.flags & ~analysis::kSampleAfterGap);  // nothing before it
+    }
+    last_source_seq_ = sample.seq;
     if (segment_due_ || sample.device_time_us < last_device_time_us_) {
         SampleSegment g;
         g.first_seq = seq;
@@ -93,6 +112,7 @@ void SampleWriter::flush() {
                 insert_one_.run();
             }
             for (const auto& g : pending_segments_) store_.add_sample_segment(session_id_, g);
+            for (const auto& g : pending_gaps_) store_.add_sample_gap(session_id_, g);
             tx.commit();
         } catch (const StorageError& e) {
             if (e.kind() == StorageError::Kind::disk_full) {
@@ -108,6 +128,7 @@ void SampleWriter::flush() {
     committed_ += n;
     pending_.clear();
     pending_segments_.clear();
+    pending_gaps_.clear();
 }
 
 }  // namespace ballbar::storage

@@ -165,7 +165,21 @@ CREATE TABLE imports (
 CREATE INDEX imports_by_content ON imports(content_sha256);
 )sql";
 
-inline constexpr std::array<std::string_view, 5> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3, kMigrationV4,
-                                                                kMigrationV5};
+// v6: the gaps in a session's stream (frames the instrument sent and the host lost): where (the stored
+// seq of the first sample after the gap, which also carries the flag kSampleAfterGap), how long (the
+// instrument's time between the samples either side) and why. Sessions stored before v6 have none
+// recorded (their gaps were not kept).
+inline constexpr std::string_view kMigrationV6 = R"sql(
+CREATE TABLE sample_gaps (
+  session_id INTEGER NOT NULL REFERENCES sessions(id),
+  before_seq INTEGER NOT NULL,
+  duration_s REAL,
+  cause TEXT NOT NULL,
+  PRIMARY KEY (session_id, before_seq)
+) WITHOUT ROWID;
+)sql";
+
+inline constexpr std::array<std::string_view, 6> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3,
+                                                                kMigrationV4, kMigrationV5, kMigrationV6};
 
 }  // namespace ballbar::storage::detail

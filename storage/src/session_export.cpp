@@ -118,6 +118,10 @@ std::string session_json(Store& store, std::int64_t id, bool with_points, int in
                             {"reading_rate_hz", opt(g.reading_rate_hz)}});
     }
     doc["sample_segments"] = segments;
+    ojson gaps = ojson::array();
+    for (const auto& g : store.sample_gaps(id))
+        gaps.push_back({{"before_seq", g.before_seq}, {"duration_s", opt(g.duration_s)}, {"cause", g.cause}});
+    doc["sample_gaps"] = gaps;
     if (with_points) {
         ojson points = ojson::array();
         for (const auto& p : store.points(id)) points.push_back(point_json(p));

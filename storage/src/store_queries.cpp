@@ -97,6 +97,28 @@ std::vector<SessionInfo> Store::sessions() {
     return out;
 }
 
+void Store::add_sample_gap(std::int64_t session_id, const SampleGap& g) {
+    auto st = db_.prepare(
+        "INSERT OR REPLACE INTO sample_gaps(session_id, before_seq, duration_s, cause) VALUES (?, ?, ?, ?)");
+    st.bind(1, session_id).bind(2, to_db(g.before_seq)).bind(3, g.duration_s).bind(4, g.cause).run();
+}
+
+std::vector<SampleGap> Store::sample_gaps(std::int64_t session_id) {
+    std::vector<SampleGap> out;
+    if (schema_version_ < 6) return out;  // an older file opened read-only
+    auto st =
+        db_.prepare("SELECT before_seq, duration_s, cause FROM sample_gaps WHERE session_id = ? ORDER BY before_seq");
+    st.bind(1, session_id);
+    while (st.step()) {
+        SampleGap g;
+        g.before_seq = static_cast<std::uint64_t>(st.column_int(0));
+        g.duration_s = st.column_opt_double(1);
+        g.cause = st.column_text(2);
+        out.push_back(std::move(g));
+    }
+    return out;
+}
+
 void Store::add_sample_segment(std::int64_t session_id, const SampleSegment& g) {
     auto st = db_.prepare(
         "INSERT OR REPLACE INTO sample_segments(session_id, first_seq, device_time_us, started_at) VALUES (?, ?, ?, "

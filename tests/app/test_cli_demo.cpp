@@ -175,6 +175,18 @@ TEST_P(DemoFaults, RecoversTheErrorsUnderFaults) {
     const DemoRun rep =
         run("--db " + db.string() + " report " + std::to_string(j.at("session").get<int>()) + " --json");
     EXPECT_EQ(rep.status, 0) << rep.out.substr(0, 400);
+    // Every gap the link made is stored (issue 25): a dropped frame or one a corrupted byte voids makes
+    // a gap (adjacent ones make one).
+    const DemoRun shown =
+        run("--db " + db.string() + " sessions show " + std::to_string(j.at("session").get<int>()) + " --json");
+    ASSERT_EQ(shown.status, 0) << shown.out.substr(0, 400);
+    const auto gaps = nlohmann::json::parse(shown.out).at("sample_gaps");
+    if (std::string(faults).find("drop_frame") != std::string::npos) {
+        EXPECT_GT(gaps.size(), 0u);
+        const auto& tc = j.at("truth_check");
+        EXPECT_LE(gaps.size(), tc.at("dropped_frames").get<std::size_t>() + tc.at("corrupted_bytes").get<std::size_t>())
+            << tc.dump();
+    }
     expect_windows_name_their_samples(db, j.at("session").get<int>());
     EXPECT_EQ(j.at("truth_check").at("wrong_pose"), 0);
 }

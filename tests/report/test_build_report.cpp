@@ -105,6 +105,23 @@ TEST(BuildReport, AnRtttrTestStoredWithBothAxesGivesTheAngleTheSolverDetermines)
     EXPECT_EQ(r.orientation[2].symbol, "Δα");  // both axes: what the solver determines
 }
 
+/// Issue 25: the stream's gaps were never stored; the report shows how many and how long.
+TEST(BuildReport, TheStreamsRecordedGapsAreShown) {
+    TempDir dir;
+    storage::Store store((dir.path / "b.db").string(), fast());
+    const auto stored = testing::store_synthetic_session(store, analysis::MachineType::TTTRR, 3000, 2);
+    EXPECT_EQ(build_report(store, stored.id).trace.gaps, 0u);
+    store.add_sample_gap(stored.id, storage::SampleGap{100, 0.25, "lost frames"});
+    store.add_sample_gap(stored.id, storage::SampleGap{900, std::nullopt, "reconnect"});
+    const Report r = build_report(store, stored.id);
+    EXPECT_EQ(r.trace.gaps, 2u);
+    EXPECT_DOUBLE_EQ(r.trace.gap_s, 0.25);
+    EXPECT_EQ(to_json(r)["bar_trace"]["gaps"], 2);
+    const auto pdf = dir.path / "g.pdf";
+    render_pdf(r, pdf.string());
+    EXPECT_NE(testing::pdf_text(pdf).find("2 gaps in the stream, 0.250 s"), std::string::npos);
+}
+
 TEST(BuildReport, MalformedResultIsNamed) {
     TempDir dir;
     storage::Store store((dir.path / "b.db").string(), fast());

@@ -232,6 +232,34 @@ TEST(Migration, V4GetsTheImportsTableAndItsImportedSessionNoRecordedFile) {
     EXPECT_THROW(record_import(store, 1, "not a hash", "b.readings", 1), StorageError) << "the CHECK holds";
 }
 
+// A database exactly as schema v5 left it: v4's, with the imports table.
+TEST(Migration, V5GetsTheGapsTableAndItsSessionsNoRecordedGaps) {
+    TempDir dir;
+    const std::string path = dir.file("v5.db");
+    make_v4(path);
+    {
+        Database db(path);
+        db.exec("BEGIN");
+        db.exec(detail::kMigrations[4]);
+        db.exec("PRAGMA user_version = 5");
+        db.exec("COMMIT");
+    }
+    {
+        StoreOptions ro;
+        ro.read_only = true;
+        Store store(path, ro);
+        EXPECT_EQ(store.schema_version(), 5);
+        EXPECT_TRUE(store.sample_gaps(1).empty()) << "read-only below v6: nothing to read, no error";
+    }
+    Store store(path);
+    EXPECT_EQ(store.db().query_int("PRAGMA user_version"), Store::kSchemaVersion);
+    EXPECT_EQ(store.integrity_check(), "ok");
+    EXPECT_TRUE(store.sample_gaps(1).empty()) << "stored before v6: its gaps were not kept";
+    store.add_sample_gap(1, SampleGap{10, 0.25, "lost frames"});
+    ASSERT_EQ(store.sample_gaps(1).size(), 1u);
+    EXPECT_EQ(store.sample_gaps(1)[0].before_seq, 10u);
+}
+
 TEST(Migration, ProcedureStepsStayOutOfTheLifecycle) {
     TempDir dir;
     Store store(dir.file("new.db"));

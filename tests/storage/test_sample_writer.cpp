@@ -78,7 +78,7 @@ TEST(SampleWriter, StoresEveryFieldAndNumbersContiguously) {
         SampleWriter w(store, id);
         for (std::uint64_t i = 0; i < 1000; ++i) {
             analysis::BarSample s;
-            s.seq = 5000 + i * 3;  // the device's numbering is not the stored one
+            s.seq = 5000 + i;  // the source's numbering is not the stored one
             s.device_time_us = 1'000'000'000'000ull + i * 500;
             s.displacement_nm = static_cast<std::int32_t>(i * 1234567 % 2000001) - 1000000;
             s.flags = static_cast<std::uint16_t>(i % 8);
@@ -98,6 +98,56 @@ TEST(SampleWriter, StoresEveryFieldAndNumbersContiguously) {
     EXPECT_EQ(store.samples(id, 990, 5).front().seq, 990u);
     EXPECT_EQ(store.samples(id, 990, 5).size(), 5u);
     EXPECT_EQ(store.next_seq(id), 1000u);
+}
+
+/// Issue 25: the gap flag was dropped before storage and a session's gaps were never stored. A jump in
+/// the source's numbering (a source leaves a hole where samples were lost) or the driver's flag is a
+/// gap: recorded with where (the stored seq after it), how long (instrument time) and why, and the
+/// stored sample after it keeps kSampleAfterGap. A writer that starts (a resume) or a clock that
+/// restarts is no jump; a reconnect's gap has no duration.
+TEST(SampleWriter, RecordsEveryGapWithWhereHowLongAndWhy) {
+    TempDir dir;
+    Store store(dir.file("g.db"));
+    const auto id = running_session(store);
+    auto sample = [](std::uint64_t seq, std::uint64_t t_us, std::uint16_t flags = 0) {
+        analysis::BarSample s;
+        s.seq = seq;
+        s.device_time_us = t_us;
+        s.flags = flags;
+        return s;
+    };
+    {
+        SampleWriter w(store, id);
+        w.append(sample(0, 1000));
+        w.append(sample(1, 2000));
+        w.append(sample(3, 5000));  // a hole in the numbering: 3 ms
+        w.append(sample(4, 6000));
+        w.append(sample(5, 9000, analysis::kSampleAfterGap));  // the driver's flag
+        w.append(sample(6, 100, analysis::kSampleAfterGap));   // a reconnect: the clock restarted
+        w.append(sample(7, 200));
+    }
+    {
+        SampleWriter again(store, id);  // a resume: its numbering starts again
+        again.append(sample(0, 50));
+        again.append(sample(1, 60));
+    }
+    const auto gaps = store.sample_gaps(id);
+    ASSERT_EQ(gaps.size(), 3u);
+    EXPECT_EQ(gaps[0].before_seq, 2u);
+    ASSERT_TRUE(gaps[0].duration_s);
+    EXPECT_NEAR(*gaps[0].duration_s, 0.003, 1e-12);
+    EXPECT_EQ(gaps[0].cause, "lost frames");
+    EXPECT_EQ(gaps[1].before_seq, 4u);
+    EXPECT_NEAR(gaps[1].duration_s.value_or(0), 0.003, 1e-12);
+    EXPECT_EQ(gaps[2].before_seq, 5u);
+    EXPECT_FALSE(gaps[2].duration_s);
+    EXPECT_EQ(gaps[2].cause, "reconnect");
+    const auto back = store.samples(id);
+    ASSERT_EQ(back.size(), 9u);
+    for (std::size_t i = 0; i < back.size(); ++i) {
+        const bool after_gap = i == 2 || i == 4 || i == 5;
+        EXPECT_EQ((back[i].flags & analysis::kSampleAfterGap) != 0, after_gap) << "sample " << i;
+    }
 }
 
 TEST(SampleWriter, RefusesASessionThatIsNotRunning) {

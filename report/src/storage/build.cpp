@@ -163,6 +163,10 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
             r.trace.displacement_um = std::move(kept.y);
             if (r.trace.samples > 0) r.trace.min_um = lo, r.trace.max_um = hi;
         }
+        for (const auto& g : store.sample_gaps(session_id)) {
+            ++r.trace.gaps;
+            r.trace.gap_s += g.duration_s.value_or(0);
+        }
     }
     auto time_of = [&](std::uint64_t seq) {
         const auto it = std::lower_bound(wanted.begin(), wanted.end(), seq);

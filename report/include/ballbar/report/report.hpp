@@ -93,6 +93,8 @@ struct BarTrace {
     std::vector<double> displacement_um;  ///< transducer displacement from the calibrated length
     std::uint64_t samples = 0;
     std::optional<double> min_um, max_um;  ///< over every raw sample (not only the kept ones)
+    std::size_t gaps = 0;                  ///< gaps in the stream the session recorded (schema v6)
+    double gap_s = 0;                      ///< their instrument time in all (reconnects count 0)
 };
 
 /// One parameter of an identified error model.

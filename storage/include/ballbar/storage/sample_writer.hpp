@@ -35,7 +35,9 @@ class SampleWriter {
     SampleWriter& operator=(const SampleWriter&) = delete;
 
     /// Queues a sample and commits the batch when it is due. The stored seq is the writer's own,
-    /// contiguous count (the sample's `seq` field is ignored); it is returned. Throws StorageError
+    /// contiguous count; it is returned. The sample's `seq` (the source's numbering) is read for one
+    /// thing: a jump in it, or the flag kSampleAfterGap, is a gap in the stream, recorded (Store::
+    /// add_sample_gap, with the batch) and kept as kSampleAfterGap on the stored sample. Throws StorageError
     /// (Kind::disk_full: "disk full: …") when a commit fails; the failed batch stays pending and every
     /// batch committed before stays in the database.
     std::uint64_t append(const analysis::BarSample& sample);
@@ -66,6 +68,8 @@ class SampleWriter {
     std::chrono::steady_clock::time_point first_pending_at_{};
     std::uint64_t last_device_time_us_ = 0;
     std::vector<SampleSegment> pending_segments_;  ///< committed with the batch holding their first sample
+    std::vector<SampleGap> pending_gaps_;          ///< committed with the batch holding the sample after them
+    std::optional<std::uint64_t> last_source_seq_;
 };
 
 }  // namespace ballbar::storage

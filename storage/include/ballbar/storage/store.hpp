@@ -101,6 +101,16 @@ struct SampleSegment {
     std::optional<double> reading_rate_hz;
 };
 
+/// A gap in a session's stream: samples the instrument sent and the host lost (the driver saw the
+/// sequence numbers jump), or a stream that came back after a reconnect without them. Recorded by the
+/// SampleWriter (schema v6); the sample after it carries kSampleAfterGap.
+struct SampleGap {
+    std::uint64_t before_seq = 0;      ///< stored seq of the first sample after the gap
+    std::optional<double> duration_s;  ///< instrument time between the samples either side; empty: the
+                                       ///< instrument's clock restarted (a reconnect)
+    std::string cause;                 ///< "lost frames" or "reconnect"
+};
+
 /// One entry of a session's audit trail.
 struct Transition {
     std::optional<SessionState> from;  ///< empty for the creation entry
@@ -167,7 +177,7 @@ struct StoreOptions {
 
 class Store {
   public:
-    static constexpr int kSchemaVersion = 5;
+    static constexpr int kSchemaVersion = 6;
     static constexpr std::int64_t kApplicationId = 0x42424152;  // "BBAR"
 
     /// Opens or creates the database at `path` and migrates it to kSchemaVersion. Throws StorageError:
@@ -233,6 +243,10 @@ class Store {
     void add_sample_segment(std::int64_t session_id, const SampleSegment& segment);
     /// The session's segments in seq order; empty for sessions stored before schema v3 (and imported ones).
     std::vector<SampleSegment> sample_segments(std::int64_t session_id);
+    /// Records a gap (SampleWriter does, with the batch holding the sample after it).
+    void add_sample_gap(std::int64_t session_id, const SampleGap& gap);
+    /// The session's gaps in seq order; empty for sessions stored before schema v6.
+    std::vector<SampleGap> sample_gaps(std::int64_t session_id);
     /// Sets the instrument's resolution and measured reading rate on the session's segments that start
     /// at `from_seq` or later (the ones a connection or a resume wrote); returns how many it set.
     std::size_t set_segment_instrument(std::int64_t session_id, std::uint64_t from_seq, double resolution_mm,
