@@ -178,10 +178,7 @@ std::string location_json(const acq::LocationResult& r) {
 std::string test_json(const acq::TestResult& r) {
     json j;
     j["test"] = r.test;
-    // The enum's names: what the report reads (docs/report.md).
-    j["kind"] = r.kind == acq::TestKind::SpindleBeta  ? "SpindleBeta"
-                : r.kind == acq::TestKind::TableAlpha ? "TableAlpha"
-                                                      : "BothAxes";
+    j["kind"] = std::string(acq::to_string(r.kind));  // what the report reads (docs/report.md)
     j["dV1_mm"] = vec(r.dV1_mm);
     j["dV2_mm"] = vec(r.dV2_mm);
     auto ang = [](const std::optional<analysis::OrientationErrors>& e) -> json {

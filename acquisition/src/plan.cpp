@@ -17,11 +17,11 @@ namespace limits = ballbar::analysis::limits;
 std::string_view to_string(TestKind kind) {
     switch (kind) {
         case TestKind::BothAxes:
-            return "both";
+            return "BothAxes";
         case TestKind::SpindleBeta:
-            return "spindle-beta";
+            return "SpindleBeta";
         case TestKind::TableAlpha:
-            return "table-alpha";
+            return "TableAlpha";
     }
     return "?";
 }

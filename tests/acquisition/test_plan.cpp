@@ -17,6 +17,16 @@ using analysis::Vec3;
 
 constexpr double kLengthTol_mm = 1e-9;
 
+// Issue 25: the test kind was "spindle-beta" on the screen and "SpindleBeta" in the database (which
+// the report reads); one spelling now, and an RTTTR test's kind decides its one angle.
+TEST(TestKindNames, OneSpellingOnTheScreenInJsonAndInTheDatabase) {
+    EXPECT_EQ(to_string(TestKind::BothAxes), "BothAxes");
+    EXPECT_EQ(to_string(TestKind::SpindleBeta), "SpindleBeta");
+    EXPECT_EQ(to_string(TestKind::TableAlpha), "TableAlpha");
+    EXPECT_TRUE(measured_angles(analysis::MachineType::RTTTR, TestKind::SpindleBeta).beta);
+    EXPECT_TRUE(measured_angles(analysis::MachineType::RTTTR, TestKind::BothAxes).alpha);
+}
+
 TEST(MachineFile, ParsesGeometryTravelAndDialect) {
     const MachineFile m = parse_machine_file(R"({"format":"ballbar-machine/1","type":"TTTRR","name":"DL-5X",
         "a_pivot_mm":[0,0,0],"c_offset_mm":[0,0,-100],"tool_ball_mm":[0,0,0],

@@ -22,6 +22,8 @@ enum class TestKind {
     SpindleBeta,  ///< RTTTR: the spindle turns about B, socket on the bed (table at A = 0): Δβ
     TableAlpha,   ///< RTTTR: the table turns about A, socket on the turning table: Δα
 };
+/// The kind's one spelling, on the screen, in every `--json` and in the stored `orientation` results
+/// (docs/report.md): "BothAxes", "SpindleBeta", "TableAlpha".
 std::string_view to_string(TestKind kind);
 /// The angles a test of `kind` on a machine of `type` determines (analysis::measured_angles).
 inline analysis::MeasuredAngles measured_angles(analysis::MachineType type, TestKind kind) {
