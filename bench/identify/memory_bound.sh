@@ -35,6 +35,15 @@ check() { # LABEL BOUND_KB CMD...
 }
 check identify $((32768 + rows * 560 / 1024)) "$exe" --db "$dir/db.sqlite" identify "$dir/readings.csv" --json
 check discover $((32768 + rows * 1550 / 1024)) "$exe" --db "$dir/db.sqlite" discover "$dir/readings.csv" --json
+# Records are counted before the readings' room is reserved: 200 MiB of empty lines, or of lines of
+# commas alone, reserve nothing resident and are refused (≤ 64 MiB).
+head -n 12 "$dir/readings.csv" | grep '^#' >"$dir/empty.csv"
+cp "$dir/empty.csv" "$dir/commas.csv"
+yes '' | head -c 209715200 >>"$dir/empty.csv"
+yes ',,,,,,,,,,,,,,,,,,' | head -c 209715200 >>"$dir/commas.csv"
+check "200 MiB of empty lines (refused)" 65536 "$exe" --db "$dir/db.sqlite" identify "$dir/empty.csv"
+check "200 MiB of lines of commas (refused)" 65536 "$exe" --db "$dir/db.sqlite" identify "$dir/commas.csv"
+rm -f "$dir/empty.csv" "$dir/commas.csv"
 # 16 MiB of "0," (8 M values): parsed, 418 MB; refused by the value count first.
 awk 'BEGIN { printf "["; for (i = 0; i < 8388606; i++) printf "0,"; printf "0]" }' >"$dir/flat.json"
 check "a 16 MiB JSON machine file of 8 M values (refused)" 65536 "$exe" measure --dry-run --machine "$dir/flat.json"
