@@ -45,9 +45,8 @@ std::uint64_t SampleWriter::append(const analysis::BarSample& in) {
     analysis::BarSample sample = in;
     // A gap: the driver's flag, or the source's numbering jumped (a source leaves a hole where it lost
     // samples; a resume or a reconnect that restarts the numbering is no jump).
-    const bool jumped = last_source_seq_ && sample.seq > *last_source_seq_ + 1;
-    if (!pending_.empty() || committed_ > 0) {
-        if ((sample.flags & analysis::kSampleAfterGap) || jumped) {
+    if (last_source_seq_) {  // a sample of this writer before it
+        if ((sample.flags & analysis::kSampleAfterGap) || sample.seq > *last_source_seq_ + 1) {
             SampleGap g;
             g.before_seq = seq;
             const bool clock_went_back = sample.device_time_us < last_device_time_us_;
