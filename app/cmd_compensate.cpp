@@ -22,6 +22,7 @@
 #include "ballbar/analysis/nc_compensate.hpp"
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/storage/machine_json.hpp"
+#include "ballbar/storage/model_codec.hpp"
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
 #include "files.hpp"
@@ -56,60 +57,20 @@ struct CompensateArgs {
 };
 
 struct Model {
-    ba::MachineGeometry machine;
+    bs::ErrorModel stored;
     ba::ErrorParams params{};
-    std::vector<ba::LearnedTerm> empirical;  ///< learned by discovery (docs/discovery.md)
     std::string source;
 };
 
 Model parse_model(const std::string& text, const std::string& source) {
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
-        throw CliError(kExitUsage, source + ": malformed JSON: " + e.what());
-    }
-    if (!j.is_object()) throw CliError(kExitUsage, source + ": a model must be a JSON object");
-    if (j.contains("format") && j["format"] != "ballbar-model/1")
-        throw CliError(kExitUsage, source + ": format " + j["format"].dump() + " is not ballbar-model/1");
-    if (!j.contains("machine")) throw CliError(kExitUsage, source + ": no \"machine\" (the geometry is needed)");
-    static constexpr const char* kModelKeys[] = {"format",  "machine",         "params",   "std",       "unobservable",
-                                                 "sockets", "residual_rms_um", "readings", "converged", "empirical",
-                                                 "added"};
-    for (const auto& item : j.items())
-        if (std::find(std::begin(kModelKeys), std::end(kModelKeys), item.key()) == std::end(kModelKeys))
-            throw CliError(kExitUsage, source + ": " + item.key() +
-                                           ": unknown key (format, machine, params, std, unobservable, sockets, "
-                                           "residual_rms_um, readings, converged, empirical, added)");
     Model m;
     m.source = source;
     try {
-        m.machine = bs::machine_from_json(j["machine"].dump());
-    } catch (const std::exception& e) {
-        throw CliError(kExitUsage, source + ": machine: " + e.what());
+        m.stored = bs::model_from_json(text);
+    } catch (const bs::FormatError& e) {
+        throw CliError(kExitUsage, source + ": " + e.what());
     }
-    if (!j.contains("params") || !j["params"].is_object())
-        throw CliError(kExitUsage, source + ": \"params\" must be an object {\"X0C\": value, ...}");
-    for (const auto& item : j["params"].items()) {
-        const auto p = ba::parse_param(item.key());
-        if (!p) throw CliError(kExitUsage, source + ": params." + item.key() + ": unknown parameter");
-        if (!item.value().is_number() || !std::isfinite(item.value().get<double>()))
-            throw CliError(kExitUsage, source + ": params." + item.key() + ": must be a finite number");
-        if (const std::string why = ba::limits::check_param(*p, item.value().get<double>()); !why.empty())
-            throw CliError(kExitUsage, source + ": params." + item.key() + " " + why);
-        m.params[*p] = item.value().get<double>();
-    }
-    if (j.contains("empirical")) {  // terms learned by `discover`: angular error tables, positioning errors
-        if (!j["empirical"].is_object())
-            throw CliError(kExitUsage, source + ": \"empirical\" must be an object {\"C_angular_h1_cos\": value, ...}");
-        for (const auto& item : j["empirical"].items()) {
-            const auto t = ba::parse_empirical_term(item.key());
-            if (!t) throw CliError(kExitUsage, source + ": empirical." + item.key() + ": unknown term");
-            if (!item.value().is_number() || !std::isfinite(item.value().get<double>()))
-                throw CliError(kExitUsage, source + ": empirical." + item.key() + ": must be a finite number");
-            m.empirical.push_back({*t, item.value().get<double>(), 0.0});
-        }
-    }
+    m.params = m.stored.values();
     return m;
 }
 
@@ -314,13 +275,13 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     co.decimals = args.decimals;
     co.solver.max_iterations = args.max_iterations;
     co.allow_truncated = args.allow_truncated;
-    co.empirical = model.empirical;  // terms learned by discover (angular tables, positioning errors)
+    co.empirical = model.stored.empirical;  // terms learned by discover (angular tables, positioning errors)
     co.title = "compensated by ballbar with " + model.source;
 
     OutputFile out(args.out, inputs);
     ba::NcCompensateSummary s;
     try {
-        s = ba::compensate_nc_program(text, model.machine, model.params, io, co,
+        s = ba::compensate_nc_program(text, model.stored.machine, model.params, io, co,
                                       [&](std::string_view chunk) { out.write(chunk); });
     } catch (const ba::NcError& e) {
         throw CliError(kExitUsage, args.program + ": " + e.what());  // `out` removes its .part

@@ -19,7 +19,7 @@
 #include "ballbar/analysis/discovery.hpp"
 #include "ballbar/analysis/effects.hpp"
 #include "ballbar/analysis/identify.hpp"
-#include "ballbar/storage/machine_json.hpp"
+#include "ballbar/storage/model_codec.hpp"
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/sqlite.hpp"
@@ -170,6 +170,18 @@ json params_json(const std::vector<ba::Param>& model, const ba::ErrorParams& val
     return p;
 }
 
+/// A version of the model as it is stored (ballbar-model/1): the parameters `model` names, their values.
+std::string stored_model(const ba::MachineGeometry& machine, const std::vector<ba::Param>& model,
+                         const ba::ErrorParams& values, std::span<const ba::LearnedTerm> learned = {},
+                         std::string added = {}) {
+    storage::ErrorModel m;
+    m.machine = machine;
+    for (ba::Param q : model) m.params.push_back({q, values[q], std::nullopt});
+    m.empirical.assign(learned.begin(), learned.end());
+    m.added = std::move(added);
+    return storage::model_to_json(m);
+}
+
 /// The display unit of a learned step's variable (detail::term_trend's bin centres).
 std::string x_unit(const ba::EmpiricalStep& st) {
     if (st.family.find("_angular") != std::string::npos) return "°";
@@ -236,10 +248,8 @@ json details_json(const ba::DiscoveryResult& r, const std::vector<std::string>& 
 /// Stores the result with every input session and the extended model, one version per step.
 void store_result(storage::Store& store, const Inputs& in, const ba::DiscoveryResult& r, const std::string& name,
                   const ba::MachineGeometry& machine) {
-    const json geometry = json::parse(storage::machine_to_json(machine));
-    storage::ModelRecord rec =
-        store.save_model(name, json{{"machine", geometry}, {"params", params_json(r.base_model, r.base_fit)}}.dump(),
-                         in.sessions, std::nullopt, "discovery: base model");
+    storage::ModelRecord rec = store.save_model(name, stored_model(machine, r.base_model, r.base_fit), in.sessions,
+                                                std::nullopt, "discovery: base model");
     std::vector<ba::Param> model = r.base_model;
     for (const ba::DiscoveryStep& st : r.steps) {
         model.push_back(st.effect->param);
@@ -247,11 +257,7 @@ void store_result(storage::Store& store, const Inputs& in, const ba::DiscoveryRe
         std::snprintf(note, sizeof note, "discovery: added %s%s%s, RMS %.3f -> %.3f um",
                       std::string(st.effect->id).c_str(), st.effect->iso.empty() ? "" : " ",
                       std::string(st.effect->iso).c_str(), st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
-        rec = store.save_model(name,
-                               json{{"machine", geometry},
-                                    {"params", params_json(model, st.model_after)},
-                                    {"added", std::string(st.effect->id)}}
-                                   .dump(),
+        rec = store.save_model(name, stored_model(machine, model, st.model_after, {}, std::string(st.effect->id)),
                                in.sessions, rec.id, note);
     }
     std::vector<ba::LearnedTerm> learned;
@@ -260,12 +266,7 @@ void store_result(storage::Store& store, const Inputs& in, const ba::DiscoveryRe
         char note[300];
         std::snprintf(note, sizeof note, "discovery: learned %s (%s), RMS %.3f -> %.3f um", st.family.c_str(),
                       st.description.c_str(), st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
-        rec = store.save_model(name,
-                               json{{"machine", geometry},
-                                    {"params", params_json(r.final_model, r.final_fit.model)},
-                                    {"empirical", empirical_json(learned)},
-                                    {"added", st.family}}
-                                   .dump(),
+        rec = store.save_model(name, stored_model(machine, r.final_model, r.final_fit.model, learned, st.family),
                                in.sessions, rec.id, note);
     }
     json payload = result_json(r);

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "ballbar/analysis/identify.hpp"
-#include "ballbar/storage/machine_json.hpp"
+#include "ballbar/storage/model_codec.hpp"
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/store.hpp"
@@ -57,32 +57,21 @@ std::vector<ba::Param> parse_params(const std::vector<std::string>& names, ba::M
     return out;
 }
 
-json vec_json(const ba::Vec3& v) {
-    return json::array({v.x(), v.y(), v.z()});
-}
-
-json model_json(const ba::MachineGeometry& machine, const ba::FitSummary& fit) {
-    json m;
-    m["format"] = "ballbar-model/1";
-    m["machine"] = json::parse(bs::machine_to_json(machine));
-    m["params"] = json::object();
-    m["std"] = json::object();
-    m["unobservable"] = json::array();
+/// The model the fit made, as it is stored (ballbar-model/1).
+bs::ErrorModel fitted_model(const ba::MachineGeometry& machine, const ba::FitSummary& fit) {
+    bs::ErrorModel m;
+    m.machine = machine;
     for (const auto& e : fit.estimates) {
-        if (!e.param) continue;
-        if (e.observable) {
-            m["params"][e.name] = e.estimate;
-            m["std"][e.name] = e.std;
-        } else {
-            m["unobservable"].push_back(e.name);
-        }
+        if (!e.param) continue;  // a socket's offset: the sockets below
+        if (e.observable)
+            m.params.push_back({*e.param, e.estimate, e.std});
+        else
+            m.unobservable.push_back(*e.param);
     }
-    m["sockets"] = json::array();
-    for (const auto& s : fit.sockets)
-        m["sockets"].push_back({{"nominal_mm", vec_json(s.nominal_mm)}, {"offset_mm", vec_json(s.offset_mm)}});
-    m["residual_rms_um"] = fit.residual_rms_mm * 1e3;
-    m["readings"] = fit.readings;
-    m["converged"] = fit.converged;
+    for (const auto& s : fit.sockets) m.sockets.push_back({s.nominal_mm, s.offset_mm});
+    m.residual_rms_um = fit.residual_rms_mm * 1e3;
+    m.readings = fit.readings;
+    m.converged = fit.converged;
     return m;
 }
 
@@ -174,14 +163,14 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     }
 
     json out = summary_json(fit);
-    const json model = model_json(readings.machine, fit);
-    out["model"] = model;
+    const std::string model = bs::model_to_json(fitted_model(readings.machine, fit));
+    out["model"] = json::parse(model);
     if (!args.no_store && fit.converged) {
         bs::Store& st = open_store(true);
         const std::string name = !args.name.empty()               ? args.name
                                  : !readings.machine.name.empty() ? readings.machine.name
                                                                   : std::string(ba::to_string(readings.machine.type));
-        const bs::ModelRecord rec = st.save_model(name, model.dump(), sessions, std::nullopt, "ballbar identify");
+        const bs::ModelRecord rec = st.save_model(name, model, sessions, std::nullopt, "ballbar identify");
         for (std::int64_t s : sessions) st.add_result(s, "identification", out.dump(), rec.id, "ballbar identify/1");
         out["model_id"] = rec.id;
         out["model_name"] = rec.name;

@@ -1,0 +1,182 @@
+// SPDX-License-Identifier: MIT
+#include "ballbar/storage/model_codec.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "ballbar/analysis/limits.hpp"
+#include "ballbar/storage/machine_json.hpp"
+
+namespace ballbar::storage {
+namespace {
+
+using json = nlohmann::ordered_json;  // "format" first, then the keys in the order written
+
+constexpr std::string_view kKeys[] = {"format",  "machine",         "params",   "std",       "unobservable",
+                                      "sockets", "residual_rms_um", "readings", "converged", "empirical",
+                                      "added"};
+
+std::string known_keys() {
+    std::string out;
+    for (std::string_view k : kKeys) out += (out.empty() ? "" : ", ") + std::string(k);
+    return out;
+}
+
+json vec_to(const analysis::Vec3& v) {
+    return json::array({v.x(), v.y(), v.z()});
+}
+
+double finite(const json& v, const std::string& where) {
+    if (!v.is_number() || !std::isfinite(v.get<double>())) throw FormatError(where + ": must be a finite number");
+    return v.get<double>();
+}
+
+analysis::Vec3 vec_from(const json& v, const std::string& where) {
+    if (!v.is_array() || v.size() != 3) throw FormatError(where + ": must be an array of 3 numbers (mm)");
+    analysis::Vec3 out;
+    for (std::size_t i = 0; i < 3; ++i) out[static_cast<int>(i)] = finite(v[i], where + "[" + std::to_string(i) + "]");
+    return out;
+}
+
+analysis::Param param_from(const std::string& name, const std::string& where) {
+    const auto p = analysis::parse_param(name);
+    if (!p) throw FormatError(where + ": unknown parameter");
+    return *p;
+}
+
+const json& object_at(const json& j, const char* key, const char* shape) {
+    const json& v = j.at(key);
+    if (!v.is_object()) throw FormatError(std::string("\"") + key + "\" must be an object " + shape);
+    return v;
+}
+
+}  // namespace
+
+analysis::ErrorParams ErrorModel::values() const {
+    analysis::ErrorParams out{};
+    for (const ModelParam& p : params) out[p.param] = p.value;
+    return out;
+}
+
+std::string model_to_json(const ErrorModel& m) {
+    json j = json::object();
+    j["format"] = std::string(kModelFormat);
+    j["machine"] = json::parse(machine_to_json(m.machine));
+    j["params"] = json::object();
+    for (const ModelParam& p : m.params) j["params"][std::string(analysis::param_info(p.param).name)] = p.value;
+    if (std::any_of(m.params.begin(), m.params.end(), [](const ModelParam& p) { return p.std.has_value(); })) {
+        j["std"] = json::object();
+        for (const ModelParam& p : m.params)
+            if (p.std) j["std"][std::string(analysis::param_info(p.param).name)] = *p.std;
+    }
+    if (!m.unobservable.empty()) {
+        j["unobservable"] = json::array();
+        for (analysis::Param p : m.unobservable) j["unobservable"].push_back(std::string(analysis::param_info(p).name));
+    }
+    if (!m.empirical.empty()) {
+        j["empirical"] = json::object();
+        for (const analysis::LearnedTerm& t : m.empirical) j["empirical"][t.term.name()] = t.value;
+    }
+    if (!m.sockets.empty()) {
+        j["sockets"] = json::array();
+        for (const ModelSocket& s : m.sockets)
+            j["sockets"].push_back({{"nominal_mm", vec_to(s.nominal_mm)}, {"offset_mm", vec_to(s.offset_mm)}});
+    }
+    if (m.residual_rms_um) j["residual_rms_um"] = *m.residual_rms_um;
+    if (m.readings) j["readings"] = *m.readings;
+    if (m.converged) j["converged"] = *m.converged;
+    if (!m.added.empty()) j["added"] = m.added;
+    return j.dump();
+}
+
+ErrorModel model_from_json(std::string_view text) {
+    json j;
+    try {
+        j = json::parse(text);
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
+        throw FormatError(std::string("malformed JSON: ") + e.what());
+    }
+    if (!j.is_object()) throw FormatError("a model must be a JSON object");
+    for (const auto& item : j.items())
+        if (std::find(std::begin(kKeys), std::end(kKeys), item.key()) == std::end(kKeys))
+            throw FormatError(item.key() + ": unknown key (" + known_keys() + ")");
+    if (j.contains("format") && j["format"] != kModelFormat)
+        throw FormatError("format " + j["format"].dump() + " is not " + std::string(kModelFormat));
+    if (!j.contains("machine")) throw FormatError("no \"machine\" (the geometry is needed)");
+    ErrorModel m;
+    try {
+        m.machine = machine_from_json(j["machine"].dump());
+    } catch (const FormatError& e) {
+        // machine_from_json names its keys "machine.…" already
+        const std::string what = e.what();
+        throw FormatError(what.starts_with("machine") ? what : "machine: " + what);
+    }
+    if (!j.contains("params") || !j["params"].is_object())
+        throw FormatError("\"params\" must be an object {\"X0C\": value, ...}");
+    for (const auto& item : j["params"].items()) {
+        const std::string where = "params." + item.key();
+        const analysis::Param p = param_from(item.key(), where);
+        const double v = finite(item.value(), where);
+        if (const std::string why = analysis::limits::check_param(p, v); !why.empty())
+            throw FormatError(where + " " + why);
+        m.params.push_back({p, v, std::nullopt});
+    }
+    if (j.contains("std"))
+        for (const auto& item : object_at(j, "std", "{\"X0C\": uncertainty, ...}").items()) {
+            const std::string where = "std." + item.key();
+            const analysis::Param p = param_from(item.key(), where);
+            const double v = finite(item.value(), where);
+            if (v < 0) throw FormatError(where + ": an uncertainty cannot be negative");
+            const auto it =
+                std::find_if(m.params.begin(), m.params.end(), [p](const ModelParam& q) { return q.param == p; });
+            if (it == m.params.end()) throw FormatError(where + ": the model holds no value of " + item.key());
+            it->std = v;
+        }
+    if (j.contains("unobservable")) {
+        if (!j["unobservable"].is_array()) throw FormatError("\"unobservable\" must be an array of parameter names");
+        for (const auto& v : j["unobservable"]) {
+            if (!v.is_string()) throw FormatError("\"unobservable\" must be an array of parameter names");
+            m.unobservable.push_back(param_from(v.get<std::string>(), "unobservable." + v.get<std::string>()));
+        }
+    }
+    if (j.contains("empirical"))  // terms learned by `discover`: angular error tables, positioning errors
+        for (const auto& item : object_at(j, "empirical", "{\"C_angular_h1_cos\": value, ...}").items()) {
+            const std::string where = "empirical." + item.key();
+            const auto t = analysis::parse_empirical_term(item.key());
+            if (!t) throw FormatError(where + ": unknown term");
+            m.empirical.push_back({*t, finite(item.value(), where), 0.0});
+        }
+    if (j.contains("sockets")) {
+        if (!j["sockets"].is_array()) throw FormatError("\"sockets\" must be an array");
+        for (std::size_t i = 0; i < j["sockets"].size(); ++i) {
+            const json& s = j["sockets"][i];
+            const std::string where = "sockets[" + std::to_string(i) + "]";
+            if (!s.is_object() || !s.contains("nominal_mm") || !s.contains("offset_mm") || s.size() != 2)
+                throw FormatError(where + ": must be {\"nominal_mm\": [x, y, z], \"offset_mm\": [x, y, z]}");
+            m.sockets.push_back(
+                {vec_from(s["nominal_mm"], where + ".nominal_mm"), vec_from(s["offset_mm"], where + ".offset_mm")});
+        }
+    }
+    if (j.contains("residual_rms_um")) {
+        m.residual_rms_um = finite(j["residual_rms_um"], "residual_rms_um");
+        if (*m.residual_rms_um < 0) throw FormatError("residual_rms_um: cannot be negative");
+    }
+    if (j.contains("readings")) {
+        if (!j["readings"].is_number_integer() || j["readings"].get<std::int64_t>() < 0 ||
+            j["readings"].get<std::int64_t>() > 2147483647)
+            throw FormatError("readings: must be a count (a non-negative integer)");
+        m.readings = j["readings"].get<int>();
+    }
+    if (j.contains("converged")) {
+        if (!j["converged"].is_boolean()) throw FormatError("converged: must be true or false");
+        m.converged = j["converged"].get<bool>();
+    }
+    if (j.contains("added")) {
+        if (!j["added"].is_string()) throw FormatError("added: must be a string");
+        m.added = j["added"].get<std::string>();
+    }
+    return m;
+}
+
+}  // namespace ballbar::storage

@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: MIT
+// The stored error model, ballbar-model/1: documents written by hand from docs/identification.md are
+// read to the values they hold, what is written reads back exactly, and what the format does not allow
+// is refused naming the key.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "ballbar/storage/machine_json.hpp"
+#include "ballbar/storage/model_codec.hpp"
+
+namespace ballbar::storage {
+namespace {
+
+using analysis::Param;
+
+const std::string kMachine =
+    R"("machine":{"type":"TTTRR","name":"m1","a_pivot_mm":[0,0,-50],"c_offset_mm":[0,0,-100],"tool_ball_mm":[0,0,-200]})";
+
+TEST(ModelCodec, ReadsTheDocumentedDocument) {
+    const ErrorModel m = model_from_json(R"({"format":"ballbar-model/1",)" + kMachine + R"(,
+        "params":{"X0C":0.035,"B0C":-2e-5},"std":{"X0C":3.3e-5},"unobservable":["A_zero"],
+        "sockets":[{"nominal_mm":[100,0,0],"offset_mm":[0.001,-0.002,0]}],
+        "residual_rms_um":0.09,"readings":66,"converged":true})");
+    EXPECT_EQ(m.machine.type, analysis::MachineType::TTTRR);
+    EXPECT_EQ(m.machine.name, "m1");
+    EXPECT_DOUBLE_EQ(m.machine.c_offset_mm.z(), -100);
+    ASSERT_EQ(m.params.size(), 2u);
+    EXPECT_EQ(m.params[0].param, Param::X0C);
+    EXPECT_DOUBLE_EQ(m.params[0].value, 0.035);
+    ASSERT_TRUE(m.params[0].std.has_value());
+    EXPECT_DOUBLE_EQ(*m.params[0].std, 3.3e-5);
+    EXPECT_FALSE(m.params[1].std.has_value());
+    const analysis::ErrorParams v = m.values();
+    EXPECT_DOUBLE_EQ(v[Param::X0C], 0.035);
+    EXPECT_DOUBLE_EQ(v[Param::B0C], -2e-5);
+    EXPECT_DOUBLE_EQ(v[Param::Y0C], 0.0) << "parameters the model does not hold are 0";
+    ASSERT_EQ(m.unobservable.size(), 1u);
+    EXPECT_EQ(m.unobservable[0], Param::A_zero);
+    ASSERT_EQ(m.sockets.size(), 1u);
+    EXPECT_DOUBLE_EQ(m.sockets[0].offset_mm.y(), -0.002);
+    EXPECT_EQ(m.readings, 66);
+    EXPECT_EQ(m.converged, true);
+    EXPECT_DOUBLE_EQ(m.residual_rms_um.value_or(-1), 0.09);
+}
+
+TEST(ModelCodec, AModelStoredBeforeTheFormatKeyAndDiscoverysVersionsAreRead) {
+    const ErrorModel m = model_from_json(
+        "{" + kMachine + R"(,"params":{"X0C":0.01},"empirical":{"C_angular_h1_cos":1e-5},"added":"C_angular"})");
+    ASSERT_EQ(m.empirical.size(), 1u);
+    EXPECT_EQ(m.empirical[0].term.name(), "C_angular_h1_cos");
+    EXPECT_DOUBLE_EQ(m.empirical[0].value, 1e-5);
+    EXPECT_EQ(m.added, "C_angular");
+}
+
+TEST(ModelCodec, WhatIsWrittenReadsBackExactly) {
+    ErrorModel m;
+    m.machine = machine_from_json(R"({"type":"RTTTR","a_pivot_mm":[1.5,0,-50],"tool_ball_mm":[0,0,-150.25]})");
+    m.params = {{Param::X0C, 0.1 / 3.0, 1e-7 / 3.0}, {Param::A_zero, -1.0 / 7e5, std::nullopt}};
+    m.unobservable = {Param::C0A};
+    m.sockets = {{analysis::Vec3(1, 2, 3), analysis::Vec3(1e-3 / 3, 0, -2e-4)}};
+    m.residual_rms_um = 0.123456789;
+    m.readings = 123;
+    m.converged = false;
+    const std::string text = model_to_json(m);
+    EXPECT_EQ(text.rfind(R"({"format":"ballbar-model/1",)", 0), 0u) << text;
+    const ErrorModel back = model_from_json(text);
+    EXPECT_EQ(model_to_json(back), text);
+    EXPECT_EQ(back.params[0].value, 0.1 / 3.0) << "to the last bit";
+    EXPECT_EQ(*back.params[0].std, 1e-7 / 3.0);
+    EXPECT_EQ(back.params[1].value, -1.0 / 7e5);
+    EXPECT_EQ(back.sockets[0].offset_mm.x(), 1e-3 / 3);
+    EXPECT_EQ(back.machine.a_pivot_mm.x(), 1.5);
+}
+
+TEST(ModelCodec, RefusesWhatTheFormatDoesNotAllowNamingTheKey) {
+    const std::string p = R"("params":{"X0C":0.01})";
+    const struct {
+        std::string text, says;
+    } cases[] = {
+        {"[1]", "must be a JSON object"},
+        {"{" + kMachine + "," + p + ",", "malformed JSON"},
+        {R"({"format":"ballbar-model/2",)" + kMachine + "," + p + "}", "is not ballbar-model/1"},
+        {"{" + p + "}", "no \"machine\""},
+        {"{" + kMachine + "}", "\"params\" must be an object"},
+        {"{" + kMachine + "," + p + R"(,"parms":{}})", "parms: unknown key"},
+        {"{" + kMachine + R"(,"params":{"X9Q":1}})", "params.X9Q: unknown parameter"},
+        {"{" + kMachine + R"(,"params":{"X0C":"1"}})", "params.X0C: must be a finite number"},
+        {"{" + kMachine + R"(,"params":{"X0C":1e308}})", "params.X0C"},
+        {"{" + kMachine + "," + p + R"(,"std":{"X0C":-1}})", "std.X0C: an uncertainty cannot be negative"},
+        {"{" + kMachine + "," + p + R"(,"std":{"Y0C":1e-6}})", "std.Y0C: the model holds no value"},
+        {"{" + kMachine + "," + p + R"(,"unobservable":"A_zero"})", "\"unobservable\" must be an array"},
+        {"{" + kMachine + "," + p + R"(,"empirical":{"C_wobble":1}})", "empirical.C_wobble: unknown term"},
+        {"{" + kMachine + "," + p + R"(,"sockets":[{"nominal_mm":[1,2]}]})", "sockets[0]"},
+        {"{" + kMachine + "," + p + R"(,"readings":6.5})", "readings: must be a count"},
+        {"{" + kMachine + "," + p + R"(,"converged":1})", "converged: must be true or false"},
+        {R"({"machine":{"type":"XYZ"},)" + p + "}", "machine.type"},
+    };
+    for (const auto& c : cases) {
+        try {
+            (void)model_from_json(c.text);
+            ADD_FAILURE() << "accepted: " << c.text;
+        } catch (const FormatError& e) {
+            EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what() << "\n  for " << c.text;
+        }
+    }
+}
+
+}  // namespace
+}  // namespace ballbar::storage
