@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "ballbar/acquisition/nc_writer.hpp"
+#include "ballbar/acquisition/result_codec.hpp"
 
 namespace ballbar::app {
 
@@ -151,47 +152,6 @@ bool DeviceSource::reconnect(std::chrono::milliseconds timeout) {
     }
 }
 
-// ---- results as JSON -------------------------------------------------------------------------------
-
-namespace {
-
-json vec(const analysis::Vec3& v) {
-    return json::array({v.x(), v.y(), v.z()});
-}
-
-}  // namespace
-
-std::string location_json(const acq::LocationResult& r) {
-    json j;
-    j["test"] = r.test;
-    j["step"] = r.step;
-    j["datum_mm"] = vec(r.datum_mm);
-    j["e_exact_mm"] = vec(r.ssm.exact_mm);
-    j["e_linear_mm"] = vec(r.ssm.linear_mm);
-    j["e_std_mm"] = vec(r.ssm.std_mm);
-    j["dV_mm"] = vec(r.dV_mm);
-    j["condition_number"] = r.ssm.condition_number;
-    j["n"] = r.ssm.n;
-    return j.dump();
-}
-
-std::string test_json(const acq::TestResult& r) {
-    json j;
-    j["test"] = r.test;
-    j["kind"] = std::string(acq::to_string(r.kind));  // what the report reads (docs/report.md)
-    j["dV1_mm"] = vec(r.dV1_mm);
-    j["dV2_mm"] = vec(r.dV2_mm);
-    auto ang = [](const std::optional<analysis::OrientationErrors>& e) -> json {
-        if (!e) return nullptr;
-        return {{"d_alpha_rad", e->d_alpha_rad}, {"d_beta_rad", e->d_beta_rad}, {"d_gamma_rad", e->d_gamma_rad}};
-    };
-    j["first_order"] = ang(r.orientation.first_order);
-    j["exact"] = ang(r.orientation.exact);
-    j["std"] = ang(r.std_rad);  // of the exact solution
-    if (!r.orientation.singular.empty()) j["singular"] = r.orientation.singular;
-    return j.dump();
-}
-
 // ---- StoreSink -------------------------------------------------------------------------------------
 
 StoreSink::StoreSink(storage::Store& store, std::int64_t session_id, const acq::Plan& plan)
@@ -243,11 +203,13 @@ void StoreSink::on_point(const acq::CapturedPoint& p) {
 }
 
 void StoreSink::on_location(const acq::LocationResult& r) {
-    store_.add_result(id_, "ssm", location_json(r), std::nullopt, "ballbar acquisition/1");
+    store_.add_result(id_, std::string(acq::kSsmResultKind), acq::location_to_json(r), std::nullopt,
+                      "ballbar acquisition/1");
 }
 
 void StoreSink::on_test(const acq::TestResult& r) {
-    store_.add_result(id_, "orientation", test_json(r), std::nullopt, "ballbar acquisition/1");
+    store_.add_result(id_, std::string(acq::kOrientationResultKind), acq::test_to_json(r), std::nullopt,
+                      "ballbar acquisition/1");
 }
 
 void StoreSink::finish(const acq::SessionSummary& summary) {
@@ -271,19 +233,13 @@ void StoreSink::finish(const acq::SessionSummary& summary) {
 }
 
 void store_plan(storage::Store& store, std::int64_t session_id, const acq::Plan& plan) {
-    json j;
-    j["machine"] = json::parse(acq::write_machine_file(plan.machine));
-    j["plan"] = json::parse(acq::write_plan_file(plan.spec, plan.machine.geometry.type));
-    store.add_result(session_id, "acquisition.plan", j.dump(), std::nullopt, "ballbar acquisition/1");
+    store.add_result(session_id, std::string(acq::kPlanResultKind), acq::plan_to_json(plan), std::nullopt,
+                     "ballbar acquisition/1");
 }
 
 acq::Plan load_plan(storage::Store& store, std::int64_t session_id) {
-    for (const auto& r : store.results(session_id)) {
-        if (r.kind != "acquisition.plan") continue;
-        const json j = json::parse(r.payload_json);
-        const acq::MachineFile m = acq::parse_machine_file(j.at("machine").dump());
-        return acq::make_plan(m, acq::parse_plan_file(j.at("plan").dump(), m.geometry.type));
-    }
+    for (const auto& r : store.results(session_id))
+        if (r.kind == acq::kPlanResultKind) return acq::plan_from_json(r.payload_json);
     throw acq::PlanError("session " + std::to_string(session_id) +
                          " has no stored plan: it was not measured by ballbar measure");
 }

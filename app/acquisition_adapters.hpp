@@ -91,8 +91,4 @@ acquisition::Plan load_plan(storage::Store& store, std::int64_t session_id);
 std::vector<acquisition::CapturedPoint> load_points(storage::Store& store, std::int64_t session_id,
                                                     const acquisition::Plan& plan);
 
-/// The session's results as JSON (kinds "ssm" / "orientation").
-std::string location_json(const acquisition::LocationResult& r);
-std::string test_json(const acquisition::TestResult& r);
-
 }  // namespace ballbar::app

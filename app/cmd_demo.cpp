@@ -18,6 +18,7 @@
 #include "acquisition_adapters.hpp"
 #include "ballbar/acquisition/compute.hpp"
 #include "ballbar/acquisition/nc_writer.hpp"
+#include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
@@ -316,17 +317,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     out["orientation"] = json::array();
     std::vector<acq::LocationResult> locs;
     for (const auto& r : store.results(id))
-        if (r.kind == "ssm") {
-            const auto j = nlohmann::json::parse(r.payload_json);
-            acq::LocationResult l;
-            l.test = j.at("test");
-            l.step = j.at("step");
-            const auto e = j.at("e_exact_mm");
-            l.ssm.exact_mm = ba::Vec3(e[0], e[1], e[2]);
-            const auto s = j.at("e_std_mm");
-            l.ssm.std_mm = ba::Vec3(s[0], s[1], s[2]);
-            locs.push_back(l);
-        }
+        if (r.kind == acq::kSsmResultKind) locs.push_back(acq::location_from_json(r.payload_json));
     for (const auto& l : locs) {
         const auto& t = truth[static_cast<std::size_t>(l.test)];
         const ba::Vec3 tr = l.step == 1 ? t.e1_mm : t.e2_mm;

@@ -15,6 +15,7 @@
 #include "acquisition_adapters.hpp"
 #include "ballbar/acquisition/compute.hpp"
 #include "ballbar/acquisition/nc_writer.hpp"
+#include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/gauge_emulator.hpp"
 #include "ballbar/device/sim_machine.hpp"
@@ -154,12 +155,10 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     out["orientation"] = json::array();
     double worst_um = 0, worst_arcsec = 0;
     for (const auto& r : store.results(id)) {
-        if (r.kind != "ssm") continue;
-        const auto j = nlohmann::json::parse(r.payload_json);
-        const int test = j.at("test");
-        const int step = j.at("step");
-        const auto e = j.at("e_exact_mm");
-        const ba::Vec3 m(e[0], e[1], e[2]);
+        if (r.kind != acq::kSsmResultKind) continue;
+        const acq::LocationResult l = acq::location_from_json(r.payload_json);
+        const int test = l.test, step = l.step;
+        const ba::Vec3& m = l.ssm.exact_mm;
         const auto& t = truth[static_cast<std::size_t>(test)];
         const ba::Vec3 tr = step == 1 ? t.e1_mm : t.e2_mm;
         worst_um = std::max(worst_um, (m - tr).cwiseAbs().maxCoeff() * 1e3);

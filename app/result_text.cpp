@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: MIT
 // What `sessions show` says of each stored result: its values, with units and uncertainties
-// (figures.hpp). The payloads are the ones app/ stores (acquisition_adapters.cpp, cmd_identify.cpp,
-// cmd_discover.cpp, cmd_demo.cpp, gauge_source.cpp); anything else shows its numbers by name.
+// (figures.hpp). The procedure's results are read by their codec (acquisition/result_codec.hpp), the
+// others as app/ stores them (cmd_identify.cpp, cmd_discover.cpp, cmd_demo.cpp, gauge_source.cpp);
+// anything else shows its numbers by name.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/analysis/error_params.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "figures.hpp"
@@ -14,6 +16,7 @@
 namespace ballbar::app {
 namespace {
 
+namespace acq = ballbar::acquisition;
 namespace ba = ballbar::analysis;
 using nlohmann::json;
 
@@ -21,63 +24,53 @@ double num(const json& j, const char* key, double fallback = 0) {
     return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
 }
 
-bool vec3(const json& j, const char* key) {
-    return j.contains(key) && j[key].is_array() && j[key].size() == 3 && j[key][0].is_number() &&
-           j[key][1].is_number() && j[key][2].is_number();
-}
-
 /// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm" from mm: two significant digits of the smallest
 /// uncertainty fix the decimals (2 to 4).
-std::string vec_um(const json& v, const json* std) {
+std::string vec_um(const ba::Vec3& v, const ba::Vec3* std) {
     int decimals = 2;
     if (std) {
         double smallest = 0;
-        for (std::size_t a = 0; a < 3; ++a) {
-            const double s = (*std)[a].get<double>() * 1e3;
+        for (int a = 0; a < 3; ++a) {
+            const double s = (*std)[a] * 1e3;
             if (s > 0 && (smallest == 0 || s < smallest)) smallest = s;
         }
         if (smallest > 0) decimals = std::clamp(1 - static_cast<int>(std::floor(std::log10(smallest))), 2, 4);
     }
     char buf[200];
-    std::snprintf(buf, sizeof buf, "(%.*f, %.*f, %.*f)", decimals, v[0].get<double>() * 1e3, decimals,
-                  v[1].get<double>() * 1e3, decimals, v[2].get<double>() * 1e3);
+    std::snprintf(buf, sizeof buf, "(%.*f, %.*f, %.*f)", decimals, v.x() * 1e3, decimals, v.y() * 1e3, decimals,
+                  v.z() * 1e3);
     std::string out = buf;
     if (std) {
-        std::snprintf(buf, sizeof buf, " ± (%.*f, %.*f, %.*f)", decimals, (*std)[0].get<double>() * 1e3, decimals,
-                      (*std)[1].get<double>() * 1e3, decimals, (*std)[2].get<double>() * 1e3);
+        std::snprintf(buf, sizeof buf, " ± (%.*f, %.*f, %.*f)", decimals, std->x() * 1e3, decimals, std->y() * 1e3,
+                      decimals, std->z() * 1e3);
         out += buf;
     }
     return out + " µm";
 }
 
-std::vector<std::string> ssm_lines(const json& j) {
+std::vector<std::string> ssm_lines(std::string_view payload) {
+    const acq::LocationResult r = acq::location_from_json(payload);
     char buf[96];
-    std::string line =
-        "test " + std::to_string(j.value("test", -1) + 1) + " step " + std::to_string(j.value("step", 0));
-    if (vec3(j, "e_exact_mm")) line += ": e " + vec_um(j["e_exact_mm"], vec3(j, "e_std_mm") ? &j["e_std_mm"] : nullptr);
-    if (vec3(j, "dV_mm")) line += ", ΔV " + vec_um(j["dV_mm"], nullptr);
-    std::snprintf(buf, sizeof buf, ", condition %.3g, %d points", num(j, "condition_number"), j.value("n", 0));
+    std::string line = "test " + std::to_string(r.test + 1) + " step " + std::to_string(r.step) + ": e " +
+                       vec_um(r.ssm.exact_mm, &r.ssm.std_mm) + ", ΔV " + vec_um(r.dV_mm, nullptr);
+    std::snprintf(buf, sizeof buf, ", condition %.3g, %zu points", r.ssm.condition_number, r.ssm.n);
     return {line + buf};
 }
 
-std::vector<std::string> orientation_lines(const json& j, ba::MachineType machine) {
-    const std::string kind = j.value("kind", "");
-    std::string line = "test " + std::to_string(j.value("test", -1) + 1) + " (" + kind + "):";
-    if (!j.contains("exact") || !j["exact"].is_object())
-        return {line + " orientation singular" + (j.contains("singular") ? ": " + j.value("singular", "") : "")};
-    const ba::MeasuredAngles measured = ba::measured_angles(machine, kind == "SpindleBeta");
-    std::vector<std::pair<const char*, const char*>> angles;  // (key, symbol) the test measures
-    if (measured.alpha) angles.push_back({"d_alpha_rad", "Δα"});
-    if (measured.beta) angles.push_back({"d_beta_rad", "Δβ"});
-    if (measured.gamma) angles.push_back({"d_gamma_rad", "Δγ"});
-    const json& e = j["exact"];
-    const json* s = j.contains("std") && j["std"].is_object() ? &j["std"] : nullptr;
-    for (const auto& [key, symbol] : angles) {
-        if (!e.contains(key) || !e[key].is_number()) continue;
-        const double sd = s && (*s).contains(key) && (*s)[key].is_number() ? (*s)[key].get<double>() : 0.0;
-        line += std::string(" ") + symbol + " " +
-                with_uncertainty(ba::rad_to_arcsec(e[key].get<double>()), ba::rad_to_arcsec(sd), "″");
-    }
+std::vector<std::string> orientation_lines(std::string_view payload, ba::MachineType machine) {
+    const acq::TestResult r = acq::test_from_json(payload);
+    std::string line = "test " + std::to_string(r.test + 1) + " (" + std::string(acq::to_string(r.kind)) + "):";
+    if (!r.orientation.exact)
+        return {line + " orientation singular" + (r.orientation.singular.empty() ? "" : ": " + r.orientation.singular)};
+    const ba::MeasuredAngles measured = acq::measured_angles(machine, r.kind);
+    const ba::OrientationErrors& e = *r.orientation.exact;
+    const ba::OrientationErrors s = r.std_rad.value_or(ba::OrientationErrors{});
+    auto add = [&line](const char* symbol, double v, double sd) {
+        line += std::string(" ") + symbol + " " + with_uncertainty(ba::rad_to_arcsec(v), ba::rad_to_arcsec(sd), "″");
+    };
+    if (measured.alpha) add("Δα", e.d_alpha_rad, s.d_alpha_rad);
+    if (measured.beta) add("Δβ", e.d_beta_rad, s.d_beta_rad);
+    if (measured.gamma) add("Δγ", e.d_gamma_rad, s.d_gamma_rad);
     return {line};
 }
 
@@ -170,8 +163,8 @@ std::vector<std::string> result_lines(std::string_view kind, std::string_view pa
     const json j = json::parse(payload_json, nullptr, false);
     if (j.is_discarded() || !j.is_object()) return {};
     try {
-        if (kind == "ssm") return ssm_lines(j);
-        if (kind == "orientation") return orientation_lines(j, machine);
+        if (kind == acq::kSsmResultKind) return ssm_lines(payload_json);
+        if (kind == acq::kOrientationResultKind) return orientation_lines(payload_json, machine);
         if (kind == "identification") return identification_lines(j);
         if (kind == "discovery") return discovery_lines(j);
         if (kind == "compensation") return compensation_lines(j);
@@ -180,6 +173,8 @@ std::vector<std::string> result_lines(std::string_view kind, std::string_view pa
         return generic_lines(j);
     } catch (const json::exception&) {
         return {"(values not readable: " + std::string(kind) + " payload of another shape)"};
+    } catch (const acq::ResultFormatError& e) {
+        return {std::string("(values not readable: ") + e.what() + ")"};
     }
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/types.hpp"
 #include "circular.hpp"
@@ -49,13 +50,6 @@ std::string opt_str(std::string_view kind, const json& j, const char* key) {
     if (!v->is_string()) bad(kind, key, "must be a string");
     return v->get<std::string>();
 }
-std::optional<Vec3> opt_vec(std::string_view kind, const json& j, const char* key) {
-    const json* v = find(j, key);
-    if (!v) return std::nullopt;
-    if (!v->is_array() || v->size() != 3 || !(*v)[0].is_number() || !(*v)[1].is_number() || !(*v)[2].is_number())
-        bad(kind, key, "must be an array of three numbers");
-    return Vec3((*v)[0].get<double>(), (*v)[1].get<double>(), (*v)[2].get<double>());
-}
 std::vector<double> nums(std::string_view kind, const json& j, const char* key) {
     std::vector<double> out;
     const json* v = find(j, key);
@@ -72,62 +66,47 @@ std::vector<double> nums(std::string_view kind, const json& j, const char* key) 
     return out;
 }
 
-void add_ssm(Report& r, std::string_view kind, const json& p) {
+// The procedure's results are read by their codec (acquisition/result_codec.hpp): strict, one owner.
+void add_ssm(Report& r, const json& p) {
+    const acquisition::LocationResult x = acquisition::location_from_json(p.dump());
     LocationError l;
-    const int test = opt_int(kind, p, "test", -1), step = opt_int(kind, p, "step", 0);
-    l.location = opt_int(kind, p, "location",
-                         test >= 0 && step > 0 ? test * 2 + step - 1 : static_cast<int>(r.locations.size()));
-    l.label = opt_str(kind, p, "label");
-    if (l.label.empty() && test >= 0)
-        // Numbered as the CLI numbers them (measure's prompts, sessions show): test and step from 1.
-        l.label = "test " + std::to_string(test + 1) +
-                  (step == 1   ? " step 1, before rotation"
-                   : step == 2 ? " step 2, after rotation"
-                               : "");
-    const auto dv = opt_vec(kind, p, "dV_mm");
-    if (!dv) bad(kind, "dV_mm", "is missing");
-    l.error_um = *dv * 1000.0;
-    if (const auto s = opt_vec(kind, p, find(p, "e_std_mm") ? "e_std_mm" : "std_mm")) l.uncertainty_um = *s * 1000.0;
-    if (const auto d = opt_vec(kind, p, "datum_mm")) l.position_mm = *d;
-    l.points = opt_int(kind, p, "n", 0);
-    if (const auto rms = opt_num(kind, p, "residual_rms_mm")) l.residual_rms_um = *rms * 1000.0;
-    l.condition = opt_num(kind, p, "condition_number");
+    l.location = x.test * 2 + x.step - 1;
+    // Numbered as the CLI numbers them (measure's prompts, sessions show): test and step from 1.
+    l.label =
+        "test " + std::to_string(x.test + 1) + (x.step == 1 ? " step 1, before rotation" : " step 2, after rotation");
+    l.error_um = x.dV_mm * 1000.0;
+    l.uncertainty_um = x.ssm.std_mm * 1000.0;
+    l.position_mm = x.datum_mm;
+    l.points = static_cast<int>(x.ssm.n);
+    if (x.ssm.residual_rms_mm) l.residual_rms_um = *x.ssm.residual_rms_mm * 1000.0;
+    if (std::isfinite(x.ssm.condition_number)) l.condition = x.ssm.condition_number;
     r.locations.push_back(l);
 }
 
-std::optional<double> angle_of(std::string_view kind, const json& p, const char* block, const char* key) {
-    const json* b = find(p, block);
-    return b ? opt_num(kind, *b, key) : std::nullopt;
-}
-
-void add_orientation(Report& r, std::string_view kind, const json& p) {
-    const auto type = r.header.machine.type;
-    const std::string test_kind = opt_str(kind, p, "kind");
-    const int test = opt_int(kind, p, "test", -1);
+void add_orientation(Report& r, const json& p) {
+    const acquisition::TestResult t = acquisition::test_from_json(p.dump());
     struct Angle {
         const char* symbol;
         const char* axis;
-        const char* key;
-        const char* commanded;
+        double analysis::OrientationErrors::*member;
     };
     std::vector<Angle> angles;
-    const Angle alpha{"Δα", "A", "d_alpha_rad", "alpha_rad"}, beta{"Δβ", "B", "d_beta_rad", "beta_rad"},
-        gamma{"Δγ", "C", "d_gamma_rad", "gamma_rad"};
-    const analysis::MeasuredAngles measured = analysis::measured_angles(type, test_kind == "SpindleBeta");
-    if (measured.alpha) angles.push_back(alpha);
-    if (measured.beta) angles.push_back(beta);
-    if (measured.gamma) angles.push_back(gamma);
+    const analysis::MeasuredAngles measured = acquisition::measured_angles(r.header.machine.type, t.kind);
+    if (measured.alpha) angles.push_back({"Δα", "A", &analysis::OrientationErrors::d_alpha_rad});
+    if (measured.beta) angles.push_back({"Δβ", "B", &analysis::OrientationErrors::d_beta_rad});
+    if (measured.gamma) angles.push_back({"Δγ", "C", &analysis::OrientationErrors::d_gamma_rad});
+    auto value = [](const std::optional<analysis::OrientationErrors>& e, double analysis::OrientationErrors::*m) {
+        return e ? std::optional<double>((*e).*m) : std::nullopt;
+    };
     for (const auto& a : angles) {
         OrientationError o;
         o.symbol = a.symbol;
         o.axis = a.axis;
-        o.first_order_rad = angle_of(kind, p, "first_order", a.key);
-        o.exact_rad = angle_of(kind, p, "exact", a.key);
-        o.uncertainty_rad = angle_of(kind, p, "std", a.key);
-        o.commanded_rad = opt_num(kind, p, a.commanded);
-        if (test >= 0) o.from_location = test * 2, o.to_location = test * 2 + 1;
-        o.from_location = opt_int(kind, p, "from_location", o.from_location);
-        o.to_location = opt_int(kind, p, "to_location", o.to_location);
+        o.first_order_rad = value(t.orientation.first_order, a.member);
+        o.exact_rad = value(t.orientation.exact, a.member);
+        o.uncertainty_rad = value(t.std_rad, a.member);
+        o.from_location = t.test * 2;
+        o.to_location = t.test * 2 + 1;
         r.orientation.push_back(o);
     }
 }
@@ -332,6 +311,26 @@ void add_procedure(Report& r, std::string_view kind, const json& p) {
     r.procedure.push_back(e);
 }
 
+bool add_known_result(Report& report, std::string_view kind, const nlohmann::json& payload) {
+    if (kind == "circular")
+        add_circular(report, kind, payload);
+    else if (kind == acquisition::kSsmResultKind)
+        add_ssm(report, payload);
+    else if (kind == acquisition::kOrientationResultKind)
+        add_orientation(report, payload);
+    else if (kind == "identification")
+        add_identification(report, kind, payload);
+    else if (kind == "discovery")
+        add_discovery(report, kind, payload);
+    else if (kind == "compensation")
+        add_compensation(report, kind, payload);
+    else if (kind == "procedure" || kind == "acquisition.transition")
+        add_procedure(report, kind, payload);
+    else
+        return false;
+    return true;
+}
+
 }  // namespace
 
 bool is_known_result_kind(std::string_view kind) {
@@ -344,23 +343,11 @@ bool add_result(Report& report, std::string_view kind, const nlohmann::json& pay
         if (is_known_result_kind(kind)) throw ReportError("result \"" + std::string(kind) + "\": not a JSON object");
         return false;
     }
-    if (kind == "circular")
-        add_circular(report, kind, payload);
-    else if (kind == "ssm")
-        add_ssm(report, kind, payload);
-    else if (kind == "orientation")
-        add_orientation(report, kind, payload);
-    else if (kind == "identification")
-        add_identification(report, kind, payload);
-    else if (kind == "discovery")
-        add_discovery(report, kind, payload);
-    else if (kind == "compensation")
-        add_compensation(report, kind, payload);
-    else if (kind == "procedure" || kind == "acquisition.transition")
-        add_procedure(report, kind, payload);
-    else
-        return false;
-    return true;
+    try {
+        return add_known_result(report, kind, payload);
+    } catch (const acquisition::ResultFormatError& e) {
+        throw ReportError(e.what());
+    }
 }
 
 }  // namespace ballbar::report

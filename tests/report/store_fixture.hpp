@@ -83,10 +83,11 @@ inline StoredSession store_synthetic_session(storage::Store& store, analysis::Ma
             nlohmann::json j{{"test", t},
                              {"step", step},
                              {"datum_mm", {80.0 * t, -30.0 * step, -100.0 + 20 * t}},
+                             {"e_exact_mm", {0.01 * uni(rng), 0.01 * uni(rng), 0.01 * uni(rng)}},
+                             {"e_linear_mm", {0.01 * uni(rng), 0.01 * uni(rng), 0.01 * uni(rng)}},
+                             {"e_std_mm", {0.0004, 0.00035, 0.0003}},
                              {"dV_mm", {0.012 * uni(rng), 0.012 * uni(rng), 0.008 * uni(rng)}},
-                             {"std_mm", {0.0004, 0.00035, 0.0003}},
                              {"condition_number", 1.3},
-                             {"residual_rms_mm", nullptr},
                              {"n", points_per_step}};
             store.add_result(out.id, "ssm", j.dump());
             out.ssm.push_back(j);
@@ -98,12 +99,11 @@ inline StoredSession store_synthetic_session(storage::Store& store, analysis::Ma
         };
         nlohmann::json o{{"test", t},
                          {"kind", kind},
+                         {"dV1_mm", {0.0, 0.0, 0.0}},
+                         {"dV2_mm", {0.0, 0.0, 0.0}},
                          {"first_order", errs()},
                          {"exact", errs()},
-                         {"singular", ""},
-                         {"alpha_rad", analysis::deg_to_rad(30.0 + t)},
-                         {"beta_rad", analysis::deg_to_rad(45.0)},
-                         {"gamma_rad", analysis::deg_to_rad(90.0)}};
+                         {"std", nullptr}};
         store.add_result(out.id, "orientation", o.dump());
         out.orientation.push_back(o);
     }

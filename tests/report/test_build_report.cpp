@@ -126,7 +126,9 @@ TEST(BuildReport, MalformedResultIsNamed) {
     TempDir dir;
     storage::Store store((dir.path / "b.db").string(), fast());
     const auto stored = testing::store_synthetic_session(store, analysis::MachineType::TTTRR, 3000, 3);
-    const auto id = store.add_result(stored.id, "ssm", R"({"test": 0, "step": 1, "dV_mm": [1, 2]})");
+    nlohmann::json bad = stored.ssm[0];
+    bad["dV_mm"] = {1, 2};
+    const auto id = store.add_result(stored.id, "ssm", bad.dump());
     try {
         build_report(store, stored.id);
         FAIL() << "no error";

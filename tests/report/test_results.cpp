@@ -19,7 +19,8 @@ Report tttrr() {
 TEST(Results, SsmOfTheAcquisition) {
     Report r = tttrr();
     ASSERT_TRUE(add_result(r, "ssm", json::parse(R"({"condition_number":1.0,"dV_mm":[-0.0075,-0.0207,0.0118],
-        "datum_mm":[-49.275,-14.312,-177.777],"e_std_mm":[4.9e-06,4.8e-06,5e-06],"n":3,"step":2,"test":1})")));
+        "datum_mm":[-49.275,-14.312,-177.777],"e_exact_mm":[-0.0075,-0.0207,0.0118],"e_linear_mm":[-0.0075,-0.0207,0.0118],
+        "e_std_mm":[4.9e-06,4.8e-06,5e-06],"n":3,"step":2,"test":1})")));
     ASSERT_EQ(r.locations.size(), 1u);
     const auto& l = r.locations[0];
     EXPECT_EQ(l.location, 3);  // 2·test + step − 1, as the acquisition numbers the points
@@ -32,7 +33,7 @@ TEST(Results, SsmOfTheAcquisition) {
 TEST(Results, OrientationGivesTheTypesAngles) {
     Report r = tttrr();
     add_result(r, "orientation", json::parse(R"({"test":0,"kind":"BothAxes","dV1_mm":[0,0,0],"dV2_mm":[0,0,0],
-        "first_order":{"d_alpha_rad":1e-4,"d_beta_rad":0,"d_gamma_rad":2e-4},"exact":null,"singular":"exact: S0 = 0"})"));
+        "first_order":{"d_alpha_rad":1e-4,"d_beta_rad":0,"d_gamma_rad":2e-4},"exact":null,"std":null,"singular":"exact: S0 = 0"})"));
     ASSERT_EQ(r.orientation.size(), 2u);
     EXPECT_EQ(r.orientation[0].symbol, "Δα");
     EXPECT_EQ(r.orientation[1].symbol, "Δγ");
