@@ -29,7 +29,7 @@ struct CircleTestOptions {
 /// the test header's range (docs/formats/trace.md); `feed_help` is the command's own words for --feed.
 void add_circle_geometry_options(CLI::App& cmd, CircleTestOptions& test, const std::string& feed_help);
 
-/// The test these options describe; CliError (usage) naming the option when it is not a test.
+/// The test these options describe; Error (bad input) naming the option when it is not a test.
 analysis::circular::TestSpec circle_test(const CircleTestOptions& o);
 
 }  // namespace ballbar::app

@@ -51,11 +51,12 @@ std::string resolve_db_path(const Globals& globals) {
     } else if (const char* home = std::getenv("HOME"); home && *home) {
         dir = std::filesystem::path(home) / ".local" / "share" / "ballbar";
     } else {
-        throw CliError(kExitUsage, "cannot find a data directory: set XDG_DATA_HOME or HOME, or pass --db PATH");
+        throw Error(ErrorCategory::bad_input,
+                    "cannot find a data directory: set XDG_DATA_HOME or HOME, or pass --db PATH");
     }
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
-    if (ec) throw CliError(kExitFailure, "cannot create " + dir.string() + ": " + ec.message());
+    if (ec) throw Error(ErrorCategory::failed, "cannot create " + dir.string() + ": " + ec.message());
     return (dir / "ballbar.db").string();
 }
 
@@ -74,7 +75,8 @@ std::string existing_db_path(const Globals& globals) {
     const std::string path = resolve_db_path(globals);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec))
-        throw CliError(kExitUsage, "no database at " + path + (globals.db_path.empty() ? "" : " (check --db)"));
+        throw Error(ErrorCategory::bad_input,
+                    "no database at " + path + (globals.db_path.empty() ? "" : " (check --db)"));
     return path;
 }
 
@@ -239,14 +241,9 @@ int ballbar::app::cli_main(int argc, char** argv) {
     try {
         const int code = globals.action ? globals.action() : kExitOk;
         return code == kExitOk && g_database_damaged ? kExitFailure : code;
-    } catch (const CliError& e) {
-        std::cerr << "ballbar: error: " << printable(readable_message(e.what()), true) << '\n';
-        return e.code();
-    } catch (const ballbar::fileio::FileError& e) {
-        std::cerr << "ballbar: error: " << printable(readable_message(e.what()), true) << '\n';
-        return cli_error(e).code();
     } catch (const std::exception& e) {
+        // Every error once, in the one format; its category decides the exit code (command.hpp).
         std::cerr << "ballbar: error: " << printable(readable_message(e.what()), true) << '\n';
-        return kExitFailure;
+        return exit_code(workflow::category_of(e));
     }
 }

@@ -22,7 +22,6 @@
 #include "circle_test_options.hpp"
 #include "command.hpp"
 #include "files.hpp"
-#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -51,7 +50,7 @@ void check_feed_for_rate(const circ::TestSpec& t, std::optional<double> rate) {
     if (!rate) return;
     const double rate_hz = *rate;
     if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
-        throw CliError(kExitUsage, "--rate must be a reading rate > 0, readings/s");
+        throw Error(ErrorCategory::bad_input, "--rate must be a reading rate > 0, readings/s");
     const circ::SamplingLimit lim = circ::sampling_limit(t, rate_hz);
     const double spacing_mm = t.feed_mm_min / (60.0 * rate_hz);
     const std::string need =
@@ -65,11 +64,11 @@ void check_feed_for_rate(const circ::TestSpec& t, std::optional<double> rate) {
                   << "); the highest usable feed is " << num(highest) << " mm/min\n";
         return;
     }
-    throw CliError(kExitUsage, "--feed " + num(t.feed_mm_min) + " mm/min is too fast for " + num(rate_hz) +
-                                   " readings/s: the samples would lie " + num(spacing_mm) +
-                                   " mm apart along the path, and the diagnosis needs at most " +
-                                   num(lim.max_spacing_mm) + " mm (" + need + "); the highest usable feed is " +
-                                   num(highest) + " mm/min (--feed " + num(highest) + ")");
+    throw Error(ErrorCategory::bad_input,
+                "--feed " + num(t.feed_mm_min) + " mm/min is too fast for " + num(rate_hz) +
+                    " readings/s: the samples would lie " + num(spacing_mm) +
+                    " mm apart along the path, and the diagnosis needs at most " + num(lim.max_spacing_mm) + " mm (" +
+                    need + "); the highest usable feed is " + num(highest) + " mm/min (--feed " + num(highest) + ")");
 }
 
 /// The part program of trace.md's "The motion", run by run, arcs split into ≤ 90° blocks.
@@ -84,15 +83,16 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
             double lo = t.centre_mm[static_cast<std::size_t>(i)], hi = lo;
             if (i == ax[0] || i == ax[1]) lo -= t.radius_mm + t.feed_in_mm, hi += t.radius_mm + t.feed_in_mm;
             if (lo < range.min || hi > range.max)
-                throw CliError(kExitUsage, std::string("the test leaves the travel of ") + letters[i] + ": it needs " +
-                                               num(lo) + " .. " + num(hi) + " mm, the machine has " + num(range.min) +
-                                               " .. " + num(range.max) + " mm");
+                throw Error(ErrorCategory::bad_input, std::string("the test leaves the travel of ") + letters[i] +
+                                                          ": it needs " + num(lo) + " .. " + num(hi) +
+                                                          " mm, the machine has " + num(range.min) + " .. " +
+                                                          num(range.max) + " mm");
         }
     }
     try {
         return acquisition::circular_program(t, dialect, dwell_s);
     } catch (const acquisition::PlanError& e) {
-        throw CliError(kExitUsage, e.what());
+        throw Error(ErrorCategory::bad_input, e.what());
     }
 }
 
@@ -104,14 +104,14 @@ int run_plan(const PlanOptions& o, const Globals& globals) {
         try {
             machine = acquisition::parse_machine_file(read_file(o.machine_file, "machine file"));
         } catch (const std::exception& e) {
-            if (dynamic_cast<const CliError*>(&e)) throw;
-            throw CliError(kExitUsage, o.machine_file + ": " + e.what());
+            if (dynamic_cast<const Error*>(&e)) throw;
+            throw Error(ErrorCategory::bad_input, o.machine_file + ": " + e.what());
         }
     }
     analysis::NcDialect dialect = machine ? machine->dialect : analysis::NcDialect::Fanuc;
     if (!o.dialect.empty()) {
         const auto d = analysis::parse_nc_dialect(o.dialect);
-        if (!d) throw CliError(kExitUsage, "--dialect must be fanuc or linuxcnc");
+        if (!d) throw Error(ErrorCategory::bad_input, "--dialect must be fanuc or linuxcnc");
         dialect = *d;
     }
     std::vector<fileio::Protected> inputs = database_files(globals);
@@ -123,7 +123,7 @@ int run_plan(const PlanOptions& o, const Globals& globals) {
             fileio::check_distinct_outputs(o.out, "--out", o.test_out, "--test-out");
         }
     } catch (const fileio::FileError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
     write_output(o.out, "--out", circle_program(t, dialect, o.dwell_s, machine ? &*machine : nullptr), inputs);
     if (o.out != "-") inputs.push_back({o.out, "program just written (--out)"});
@@ -147,7 +147,7 @@ int run_plan(const PlanOptions& o, const Globals& globals) {
             const auto id = store.create_session(ns);
             std::cerr << "ballbar: planned session " << id << " (" << store.session(id).uuid << ")\n";
         } catch (const storage::StorageError& e) {
-            throw cli_error(e);
+            throw as_error(e);
         }
     }
     return kExitOk;
@@ -175,7 +175,7 @@ Loaded load_input(const std::string& input, const Globals& globals, bool store_f
         try {
             l.trace = storage::read_trace_file(input);
         } catch (const storage::TraceFileError& e) {
-            throw CliError(kExitUsage, input + ": " + e.what());
+            throw Error(ErrorCategory::bad_input, input + ": " + e.what());
         }
         for (const auto& w : l.trace.warnings) std::cerr << "ballbar: warning: " << input << ": " << w << '\n';
         if (store_file) {
@@ -184,7 +184,7 @@ Loaded load_input(const std::string& input, const Globals& globals, bool store_f
         }
         return l;
     }
-    if (!looks_like_session_key(input)) throw CliError(kExitUsage, input + ": no such file");
+    if (!looks_like_session_key(input)) throw Error(ErrorCategory::bad_input, input + ": no such file");
     storage::StoreOptions so;
     so.recover = false;
     storage::Store store(existing_db_path(globals), so);  // a session is looked for, never a database made
@@ -195,7 +195,7 @@ Loaded load_input(const std::string& input, const Globals& globals, bool store_f
     } catch (const storage::StorageError&) {
         throw;
     } catch (const std::exception& e) {
-        throw CliError(kExitUsage, e.what());
+        throw Error(ErrorCategory::bad_input, e.what());
     }
     l.session = id;
     return l;
@@ -210,7 +210,7 @@ int run_analyze(const AnalyzeOptions& o, const Globals& globals) {
             try {
                 results.push_back(circ::analyze_circular(inputs.back().trace.test, inputs.back().trace.samples));
             } catch (const circ::CircularError& e) {
-                throw CliError(kExitUsage, in + ": " + e.what());
+                throw Error(ErrorCategory::bad_input, in + ": " + e.what());
             }
         }
         nlohmann::ordered_json all = nlohmann::ordered_json::array();
@@ -229,7 +229,7 @@ int run_analyze(const AnalyzeOptions& o, const Globals& globals) {
             try {
                 vol = circ::combine_volumetric(results);
             } catch (const circ::CircularError& e) {
-                throw CliError(kExitUsage, e.what());
+                throw Error(ErrorCategory::bad_input, e.what());
             }
         }
         if (o.json) {
@@ -255,7 +255,7 @@ int run_analyze(const AnalyzeOptions& o, const Globals& globals) {
         }
         return kExitOk;
     } catch (const storage::StorageError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
 }
 

@@ -17,21 +17,20 @@
 #include <optional>
 #include <sstream>
 
-#include "acquisition_adapters.hpp"
 #include "ballbar/acquisition/circle_program.hpp"
 #include "ballbar/acquisition/circular_session.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
 #include "ballbar/storage/sample_writer.hpp"
 #include "ballbar/storage/trace_file.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
+#include "ballbar/workflow/pty_emulator.hpp"
+#include "ballbar/workflow/session_io.hpp"
 #include "circle_measure.hpp"
 #include "circle_output.hpp"
 #include "circle_test_options.hpp"
-#include "gauge_source.hpp"
 #include "interrupt.hpp"
 #include "operators.hpp"
-#include "pty_emulator.hpp"
-#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -307,7 +306,7 @@ std::pair<circ::CircularResult, storage::TraceFile> analyze_stored(storage::Stor
     try {
         r = circ::analyze_circular(trace.test, trace.samples);
     } catch (const circ::CircularError& e) {
-        throw CliError(kExitFailure, "session " + std::to_string(id) + ": the stored trace: " + e.what());
+        throw Error(ErrorCategory::failed, "session " + std::to_string(id) + ": the stored trace: " + e.what());
     }
     json j = circle_result_json(r, trace, std::nullopt);
     store.add_result(id, "circular", j.dump(), std::nullopt, "ballbar circular/1");
@@ -319,16 +318,17 @@ std::pair<circ::CircularResult, storage::TraceFile> analyze_stored(storage::Stor
 void outcome(const acq::CircularSummary& sum, std::optional<std::int64_t> id, const std::string& resume_hint) {
     if (sum.final_state == acq::State::Done) return;
     if (!id) {  // refused or failed before the session was made: nothing stored
-        throw CliError(sum.refused ? kExitUsage : kExitFailure, sum.reason);
+        throw Error(sum.refused ? ErrorCategory::bad_input : ErrorCategory::failed, sum.reason);
     }
     const std::string session = "session " + std::to_string(*id);
     if (sum.interrupted)
-        throw CliError(kExitInterrupted, session + " interrupted after " + std::to_string(sum.samples) + " samples (" +
-                                             sum.reason +
-                                             "); everything measured is stored. Continue it with: " + resume_hint);
-    if (sum.refused) throw CliError(kExitUsage, session + ": " + sum.reason);
-    if (sum.final_state == acq::State::Aborted) throw CliError(kExitInterrupted, session + " aborted: " + sum.reason);
-    throw CliError(kExitFailure, session + " failed: " + sum.reason);
+        throw Error(ErrorCategory::interrupted,
+                    session + " interrupted after " + std::to_string(sum.samples) + " samples (" + sum.reason +
+                        "); everything measured is stored. Continue it with: " + resume_hint);
+    if (sum.refused) throw Error(ErrorCategory::bad_input, session + ": " + sum.reason);
+    if (sum.final_state == acq::State::Aborted)
+        throw Error(ErrorCategory::interrupted, session + " aborted: " + sum.reason);
+    throw Error(ErrorCategory::failed, session + " failed: " + sum.reason);
 }
 
 // ---- circle measure ------------------------------------------------------------------------------------
@@ -351,17 +351,17 @@ circ::TestSpec test_from_options(const MeasureOptions& o) {
     if (!o.test_file.empty()) {
         try {
             return storage::parse_test_json(read_file(o.test_file, "test header"));
-        } catch (const CliError&) {
+        } catch (const Error&) {
             throw;
         } catch (const std::exception& e) {
-            throw CliError(kExitUsage, o.test_file + ": " + e.what());
+            throw Error(ErrorCategory::bad_input, o.test_file + ": " + e.what());
         }
     }
     return circle_test(o.test);
 }
 
 int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
-    if (o.device.empty()) throw CliError(kExitUsage, "--device URI is required");
+    if (o.device.empty()) throw Error(ErrorCategory::bad_input, "--device URI is required");
     // The database is opened once the request is known to be good: a refused command creates none
     // (a resumed session must be in an existing one).
     std::optional<storage::Store> opened;
@@ -369,21 +369,22 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     std::optional<std::int64_t> resumed;
     int first_attempt = 1;
     auto dialect = analysis::parse_nc_dialect(o.dialect);
-    if (!dialect) throw CliError(kExitUsage, "--dialect must be fanuc or linuxcnc");
+    if (!dialect) throw Error(ErrorCategory::bad_input, "--dialect must be fanuc or linuxcnc");
     double dwell_s = o.dwell_s;
-    if (!(dwell_s >= 0.2 && dwell_s <= 60)) throw CliError(kExitUsage, "--dwell must be 0.2 .. 60 s");
+    if (!(dwell_s >= 0.2 && dwell_s <= 60)) throw Error(ErrorCategory::bad_input, "--dwell must be 0.2 .. 60 s");
     try {
         if (!o.resume.empty()) {
             storage::Store& store = opened.emplace(existing_db_path(globals));
             const std::int64_t id = store.find_session(o.resume);
             const storage::SessionInfo before = store.session(id);
             if (before.procedure != "circular")
-                throw CliError(kExitUsage, "session " + std::to_string(id) + " is not a circular test (procedure \"" +
-                                               before.procedure + "\"): resume it with ballbar measure");
+                throw Error(ErrorCategory::bad_input, "session " + std::to_string(id) +
+                                                          " is not a circular test (procedure \"" + before.procedure +
+                                                          "\"): resume it with ballbar measure");
             if (!before.resumable())
-                throw CliError(kExitUsage, "session " + std::to_string(id) + " is " +
-                                               std::string(storage::to_string(before.state)) +
-                                               ": only an interrupted or failed session can be resumed");
+                throw Error(ErrorCategory::bad_input, "session " + std::to_string(id) + " is " +
+                                                          std::string(storage::to_string(before.state)) +
+                                                          ": only an interrupted or failed session can be resumed");
             std::cout << "Session " << id << " is " << storage::to_string(before.state)
                       << (before.reason.empty() ? "" : ": " + before.reason) << std::endl;
             test = storage::load_trace(store, id).test;
@@ -401,10 +402,10 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
             opened.emplace(resolve_db_path(globals));
         }
     } catch (const storage::StorageError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     } catch (const std::runtime_error& e) {
-        if (dynamic_cast<const CliError*>(&e)) throw;
-        throw CliError(kExitUsage, e.what());
+        if (dynamic_cast<const Error*>(&e)) throw;
+        throw Error(ErrorCategory::bad_input, e.what());
     }
     storage::Store& store = *opened;
     const auto nc_dialect = dialect.value_or(analysis::NcDialect::Fanuc);
@@ -412,7 +413,7 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     try {
         program = acq::circular_program(test, nc_dialect, dwell_s);  // every word in the controller's format
     } catch (const acq::PlanError& e) {
-        throw CliError(kExitUsage, e.what());
+        throw Error(ErrorCategory::bad_input, e.what());
     }
     const auto mode = o.json ? (o.non_interactive ? CircleOperator::Mode::JsonScripted : CircleOperator::Mode::Json)
                       : o.non_interactive ? CircleOperator::Mode::Scripted
@@ -441,7 +442,7 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
         sink_storage.emplace(store, CircleStoreSink::Create(create), test.radius_mm);
     CircleStoreSink& sink = *sink_storage;
     const std::string uri = o.device;
-    DeviceSource source([uri] {
+    workflow::DeviceSource source([uri] {
         try {
             return device::open_transport(uri);
         } catch (const std::invalid_argument& e) {
@@ -449,7 +450,8 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
         }
     });
     source.on_identified = [&sink](const device::InstrumentInfo& info) { sink.identified(info); };
-    const auto gauge = make_gauge_source(uri, test.radius_mm);  // a digital gauge on the bar (gauge_source.hpp)
+    const auto gauge =
+        workflow::make_gauge_source(uri, test.radius_mm);  // a digital gauge on the bar (gauge_source.hpp)
     const InterruptGuard interrupt;
     acq::CircularOptions options;
     options.stop = InterruptGuard::flag();
@@ -466,7 +468,7 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     acq::CircularSession session(test, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
     const acq::CircularSummary sum = session.run();
     sink.finish(sum);
-    if (gauge && sink.id()) store_gauge_instrument(store, *sink.id(), *gauge, first_seq);
+    if (gauge && sink.id()) workflow::store_gauge_instrument(store, *sink.id(), *gauge, first_seq);
     outcome(
         sum, sink.id(),
         "ballbar circle measure --resume " + (sink.id() ? std::to_string(*sink.id()) : "") + " --device " + o.device);
@@ -518,7 +520,7 @@ device::ContinuousErrors demo_errors() {
 
 int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     const auto plane = circ::parse_plane(o.plane);
-    if (!plane) throw CliError(kExitUsage, "--plane must be XY, YZ or ZX");
+    if (!plane) throw Error(ErrorCategory::bad_input, "--plane must be XY, YZ or ZX");
     const double arc = o.arc_deg > 0 ? o.arc_deg : (*plane == circ::Plane::XY ? 360.0 : 180.0);
     MeasureOptions mo;
     mo.test.plane = o.plane;
@@ -551,10 +553,10 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
         try {
             cfg.faults = device::parse_emulator_config("{\"faults\": " + text + "}").faults;
         } catch (const std::invalid_argument& e) {
-            throw CliError(kExitUsage, std::string("--faults: ") + e.what());
+            throw Error(ErrorCategory::bad_input, std::string("--faults: ") + e.what());
         }
     }
-    PtyEmulator emulator(cfg);
+    workflow::PtyEmulator emulator(cfg);
 
     storage::StoreOptions so;
     so.sync_full = false;
@@ -570,7 +572,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     std::ostringstream discard;
     CircleOperator op(show ? CircleOperator::Mode::Scripted : CircleOperator::Mode::Quiet, std::cin,
                       show ? std::cerr : static_cast<std::ostream&>(discard), false, "", "");
-    DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
+    workflow::DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
     CircleStoreSink sink(store, id, test.radius_mm);
     source.on_identified = [&sink](const device::InstrumentInfo& info) { sink.identified(info); };
     acq::CircularOptions options;
@@ -641,8 +643,9 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
                     store.path().c_str(), sum.samples, sum.attempts, sum.attempts == 1 ? "" : "s");
     }
     if (!pass)
-        throw CliError(kExitFailure, "demo session " + std::to_string(id) +
-                                         ": a diagnostic missed the emulator's truth by more than the accuracy rule");
+        throw Error(ErrorCategory::failed,
+                    "demo session " + std::to_string(id) +
+                        ": a diagnostic missed the emulator's truth by more than the accuracy rule");
     return kExitOk;
 }
 

@@ -68,7 +68,7 @@ Model parse_model(const std::string& text, const std::string& source) {
     try {
         m.stored = bs::model_from_json(text);
     } catch (const bs::FormatError& e) {
-        throw CliError(kExitUsage, source + ": " + e.what());
+        throw Error(ErrorCategory::bad_input, source + ": " + e.what());
     }
     m.params = m.stored.values();
     return m;
@@ -81,8 +81,9 @@ Model load_model(const std::string& spec, const Globals& globals) {
         return parse_model(read_file(spec, "model"), spec);
     const std::string db = resolve_db_path(globals);
     if (!std::filesystem::exists(db, ec))  // a model id or name is looked up in an existing database only
-        throw CliError(kExitUsage, "model '" + spec + "': no such file, and no database at " + db +
-                                       " for a model id or name" + (globals.db_path.empty() ? "" : " (check --db)"));
+        throw Error(ErrorCategory::bad_input, "model '" + spec + "': no such file, and no database at " + db +
+                                                  " for a model id or name" +
+                                                  (globals.db_path.empty() ? "" : " (check --db)"));
     bs::Store store(db);
     const bool numeric =
         !spec.empty() && std::all_of(spec.begin(), spec.end(), [](char c) { return c >= '0' && c <= '9'; });
@@ -94,15 +95,15 @@ Model load_model(const std::string& spec, const Globals& globals) {
         if (const auto r = store.latest_model(spec))
             return parse_model(r->params_json, "model " + r->name + " v" + std::to_string(r->version));
     } catch (const bs::StorageError& e) {
-        throw CliError(kExitUsage, e.what());  // "no model 99", said once
+        throw Error(ErrorCategory::bad_input, e.what());  // "no model 99", said once
     }
-    throw CliError(kExitUsage, "model '" + spec + "': no such file, model id or model name");
+    throw Error(ErrorCategory::bad_input, "model '" + spec + "': no such file, model id or model name");
 }
 
 ba::NcDialect pick_dialect(const CompensateArgs& args) {
     if (!args.dialect.empty()) {
         const auto d = ba::parse_nc_dialect(args.dialect);
-        if (!d) throw CliError(kExitUsage, "--dialect: '" + args.dialect + "' (fanuc or linuxcnc)");
+        if (!d) throw Error(ErrorCategory::bad_input, "--dialect: '" + args.dialect + "' (fanuc or linuxcnc)");
         return *d;
     }
     const std::string ext = std::filesystem::path(args.program).extension().string();
@@ -117,14 +118,14 @@ class OutputFile {
     OutputFile(const std::string& name, const std::vector<fileio::Protected>& inputs) try
         : file_(name, "--out", inputs) {
     } catch (const fileio::FileError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
     bool is_stdout() const { return file_.is_stdout(); }
     void write(std::string_view text) {
         try {
             file_.write(text);
         } catch (const fileio::FileError& e) {
-            throw cli_error(e);
+            throw as_error(e);
         }
     }
     void commit() {
@@ -132,7 +133,7 @@ class OutputFile {
             if (file_.is_stdout()) std::cout.flush();
             file_.commit();
         } catch (const fileio::FileError& e) {
-            throw cli_error(e);
+            throw as_error(e);
         }
     }
 
@@ -146,16 +147,16 @@ ba::NcOffsetTable parse_offsets(const std::string& text, const std::string& sour
     try {
         j = json::parse(text);
     } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
-        throw CliError(kExitUsage, source + ": malformed JSON: " + e.what());
+        throw Error(ErrorCategory::bad_input, source + ": malformed JSON: " + e.what());
     }
-    if (!j.is_object()) throw CliError(kExitUsage, source + ": the table must be a JSON object");
+    if (!j.is_object()) throw Error(ErrorCategory::bad_input, source + ": the table must be a JSON object");
     // Positions and lengths within ±100 m, rotary offsets within ±36000° (docs/compensation.md).
     auto number = [&](const json& v, const std::string& field) {
-        if (!v.is_number()) throw CliError(kExitUsage, source + ": " + field + ": must be a number");
+        if (!v.is_number()) throw Error(ErrorCategory::bad_input, source + ": " + field + ": must be a number");
         const bool deg = field.size() > 4 && field.compare(field.size() - 4, 4, "_deg") == 0;
         const double lim = deg ? ba::limits::kRotary_deg : ba::limits::kPosition_mm;
         if (const std::string why = ba::limits::check_in(v.get<double>(), -lim, lim, deg ? "deg" : "mm"); !why.empty())
-            throw CliError(kExitUsage, source + ": " + field + " " + why);
+            throw Error(ErrorCategory::bad_input, source + ": " + field + " " + why);
         return v.get<double>();
     };
     ba::NcOffsetTable t;
@@ -163,17 +164,20 @@ ba::NcOffsetTable parse_offsets(const std::string& text, const std::string& sour
         const std::string& key = item.key();
         if (key == "format") {
             if (item.value() != "ballbar-nc-offsets/1")
-                throw CliError(kExitUsage, source + ": format " + item.value().dump() + " is not ballbar-nc-offsets/1");
+                throw Error(ErrorCategory::bad_input,
+                            source + ": format " + item.value().dump() + " is not ballbar-nc-offsets/1");
         } else if (key == "measured_tool_length_mm") {
             t.measured_tool_length_mm = number(item.value(), key);
         } else if (key == "work_offsets") {
-            if (!item.value().is_object()) throw CliError(kExitUsage, source + ": work_offsets must be an object");
+            if (!item.value().is_object())
+                throw Error(ErrorCategory::bad_input, source + ": work_offsets must be an object");
             for (const auto& w : item.value().items()) {
                 static const char* names[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
                 if (std::find(std::begin(names), std::end(names), w.key()) == std::end(names))
-                    throw CliError(kExitUsage, source + ": work_offsets." + w.key() + ": not G54–G59 or G59.1–G59.3");
+                    throw Error(ErrorCategory::bad_input,
+                                source + ": work_offsets." + w.key() + ": not G54–G59 or G59.1–G59.3");
                 if (!w.value().is_object())
-                    throw CliError(kExitUsage, source + ": work_offsets." + w.key() + " must be an object");
+                    throw Error(ErrorCategory::bad_input, source + ": work_offsets." + w.key() + " must be an object");
                 ba::Pose p;
                 for (const auto& a : w.value().items()) {
                     const std::string f = "work_offsets." + w.key() + "." + a.key();
@@ -191,24 +195,25 @@ ba::NcOffsetTable parse_offsets(const std::string& text, const std::string& sour
                     else if (a.key() == "C_deg")
                         p.C_rad = ba::deg_to_rad(v);
                     else
-                        throw CliError(kExitUsage, source + ": " + f + ": unknown (X_mm Y_mm Z_mm A_deg B_deg C_deg)");
+                        throw Error(ErrorCategory::bad_input,
+                                    source + ": " + f + ": unknown (X_mm Y_mm Z_mm A_deg B_deg C_deg)");
                 }
                 t.work[w.key()] = p;
             }
         } else if (key == "tools") {
-            if (!item.value().is_object()) throw CliError(kExitUsage, source + ": tools must be an object");
+            if (!item.value().is_object()) throw Error(ErrorCategory::bad_input, source + ": tools must be an object");
             for (const auto& tl : item.value().items()) {
                 const std::string& k = tl.key();
                 if (k.empty() || k.size() > 6 ||
                     !std::all_of(k.begin(), k.end(), [](char c) { return c >= '0' && c <= '9'; }))
-                    throw CliError(kExitUsage, source + ": tools." + k + ": the key must be a tool number");
+                    throw Error(ErrorCategory::bad_input, source + ": tools." + k + ": the key must be a tool number");
                 if (!tl.value().is_object() || !tl.value().contains("length_mm") || tl.value().size() != 1)
-                    throw CliError(kExitUsage, source + ": tools." + k + " must be {\"length_mm\": L}");
+                    throw Error(ErrorCategory::bad_input, source + ": tools." + k + " must be {\"length_mm\": L}");
                 t.tool_length_mm[std::stoi(k)] = number(tl.value()["length_mm"], "tools." + k + ".length_mm");
             }
         } else {
-            throw CliError(kExitUsage,
-                           source + ": " + key + ": unknown field (work_offsets, tools, measured_tool_length_mm)");
+            throw Error(ErrorCategory::bad_input,
+                        source + ": " + key + ": unknown field (work_offsets, tools, measured_tool_length_mm)");
         }
     }
     return t;
@@ -232,7 +237,7 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (fs::is_directory(args.program, ec))
-        throw CliError(kExitUsage, "--program " + args.program + " is a directory, not an NC program");
+        throw Error(ErrorCategory::bad_input, "--program " + args.program + " is a directory, not an NC program");
     std::vector<fileio::Protected> inputs = database_files(globals);
     inputs.push_back({args.program, "program"});
     inputs.push_back({args.model, "model file"});  // when it names a file
@@ -240,9 +245,9 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     try {
         fileio::check_output(args.out, "--out", inputs);  // before any work
     } catch (const fileio::FileError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
-    if (!(args.chord_tolerance_mm > 0)) throw CliError(kExitUsage, "--chord-tolerance must be positive");
+    if (!(args.chord_tolerance_mm > 0)) throw Error(ErrorCategory::bad_input, "--chord-tolerance must be positive");
 
     const Model model = load_model(args.model, globals);
     const ba::NcDialect dialect = pick_dialect(args);
@@ -258,7 +263,8 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
         !args.controller.empty() ? args.controller : (dialect == ba::NcDialect::LinuxCNC ? "linuxcnc" : "fanuc");
     const auto codes = ba::tcp_codes_for(controller);
     if (!codes)
-        throw CliError(kExitUsage, "--controller: '" + controller + "' (linuxcnc, fanuc, siemens, heidenhain, none)");
+        throw Error(ErrorCategory::bad_input,
+                    "--controller: '" + controller + "' (linuxcnc, fanuc, siemens, heidenhain, none)");
     io.tcp = *codes;
     if (!args.tcp_on.empty()) io.tcp.on = split_codes(args.tcp_on);
     if (!args.tcp_off.empty()) io.tcp.off = split_codes(args.tcp_off);
@@ -284,9 +290,9 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
         s = ba::compensate_nc_program(text, model.stored.machine, model.params, io, co,
                                       [&](std::string_view chunk) { out.write(chunk); });
     } catch (const ba::NcError& e) {
-        throw CliError(kExitUsage, args.program + ": " + e.what());  // `out` removes its .part
+        throw Error(ErrorCategory::bad_input, args.program + ": " + e.what());  // `out` removes its .part
     } catch (const ba::AnalysisError& e) {
-        throw CliError(kExitUsage, args.program + ": " + e.what());
+        throw Error(ErrorCategory::bad_input, args.program + ": " + e.what());
     }
     const bool failed = s.not_converged > 0 && !args.force;
     if (!failed) out.commit();
@@ -348,8 +354,8 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     if (s.not_converged > 0) {
         std::string msg = "--exact did not converge for " + std::to_string(s.not_converged) + " point(s), lines";
         for (int l : s.not_converged_lines) msg += ' ' + std::to_string(l);
-        throw CliError(kExitFailure,
-                       msg + (failed ? "; nothing written (--force writes it anyway)" : "; written (--force)"));
+        throw Error(ErrorCategory::failed,
+                    msg + (failed ? "; nothing written (--force writes it anyway)" : "; written (--force)"));
     }
     return kExitOk;
 }

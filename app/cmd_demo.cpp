@@ -15,19 +15,20 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "acquisition_adapters.hpp"
 #include "ballbar/acquisition/compute.hpp"
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
+#include "ballbar/workflow/pty_emulator.hpp"
+#include "ballbar/workflow/session_io.hpp"
 #include "circle_measure.hpp"  // demo --test circular
 #include "command.hpp"
 #include "figures.hpp"
 #include "files.hpp"
-#include "gauge_source.hpp"  // demo --instrument: a digital gauge (issue 14)
-#include "pty_emulator.hpp"
+#include "gauge_commands.hpp"  // demo --instrument: a digital gauge (issue 14)
 #if __has_include("ballbar/report/build.hpp")
 #include "ballbar/report/build.hpp"
 #define BALLBAR_HAVE_REPORT 1
@@ -174,7 +175,7 @@ device::FaultConfig parse_faults(const std::string& spec) {
     try {
         return device::parse_emulator_config("{\"faults\": " + text + "}").faults;
     } catch (const std::invalid_argument& e) {
-        throw CliError(kExitUsage, std::string("--faults: ") + e.what());
+        throw Error(ErrorCategory::bad_input, std::string("--faults: ") + e.what());
     }
 }
 
@@ -227,7 +228,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         try {
             fileio::check_output(o.report, "--report", inputs);  // before the demo runs
         } catch (const fileio::FileError& e) {
-            throw cli_error(e);
+            throw as_error(e);
         }
     }
     if (o.test == "circular")
@@ -235,14 +236,14 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     if (!o.instrument.empty() && o.instrument != "ballbar")
         return run_gauge_demo({o.instrument, o.machine, o.seed, o.gauge_rate_hz, o.json}, resolve_db_path(globals));
     const auto type = ba::parse_machine_type(o.machine);
-    if (!type) throw CliError(kExitUsage, "--machine must be RRTTT, TTTRR or RTTTR");
+    if (!type) throw Error(ErrorCategory::bad_input, "--machine must be RRTTT, TTTRR or RTTTR");
     const acq::MachineFile machine = acq::seed_machine(*type);
     acq::PlanSpec spec = acq::default_plan(machine);
     if (!o.plan.empty()) {
         try {
             spec = acq::parse_plan_file(read_file(o.plan, "plan file"), machine.geometry.type);
         } catch (const acq::PlanError& e) {
-            throw CliError(kExitUsage, o.plan + ": " + e.what());
+            throw Error(ErrorCategory::bad_input, o.plan + ": " + e.what());
         }
         spec.answers.on_point_failure = acq::PointFailureAction::Retry;  // the demo's operator never gives up
     }
@@ -261,7 +262,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     cfg.machine.socket_mm = plan.points.front().socket_mm;
     cfg.machine.start = plan.points.front().pose;
     if (!o.faults.empty()) cfg.faults = parse_faults(o.faults);
-    PtyEmulator emulator(cfg);
+    workflow::PtyEmulator emulator(cfg);
     emulator.emulator().machine().keep_history();  // for the truth check of every stored point
 
     // A killed demo loses at most its last batch; the demo does not need an fsync per commit.
@@ -282,14 +283,14 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     ns.instrument = inst;
     const std::int64_t id = store.create_session(ns);
     store.start_session(id);
-    store_plan(store, id, plan);
+    workflow::store_plan(store, id, plan);
 
     const bool show = !o.json && ::isatty(STDERR_FILENO);
     if (!o.json)
         std::cout << "ballbar demo: " << o.machine << " (" << machine.geometry.name << "), " << plan.test_count()
                   << " two-step tests, " << plan.points.size() << " points; emulator on " << emulator.path() << "\n";
-    DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
-    StoreSink sink(store, id, plan);
+    workflow::DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
+    workflow::StoreSink sink(store, id, plan);
     DemoOperator op(plan, emulator.emulator().machine(), show, !o.json, cfg.faults);
     acq::Session session(plan, source, sink, op);
     const acq::SessionSummary sum = session.run();
@@ -303,9 +304,9 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         truth += tc.wrong_pose == 0
                      ? "all at their pose"
                      : std::to_string(tc.wrong_pose) + " away from their pose (first: " + tc.first_wrong + ")";
-        throw CliError(kExitFailure, "demo session " + std::to_string(id) + " ended " +
-                                         std::string(storage::to_string(store.session(id).state)) + ": " + sum.reason +
-                                         truth);
+        throw Error(ErrorCategory::failed, "demo session " + std::to_string(id) + " ended " +
+                                               std::string(storage::to_string(store.session(id).state)) + ": " +
+                                               sum.reason + truth);
     }
 
     // Compare with the truth.
@@ -353,9 +354,9 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
                           {"replayed_frames", ec.replayed_frames},
                           {"corrupted_bytes", ec.corrupted_bytes}};
     if (tc.wrong_pose > 0 || tc.stored_twice > 0)
-        throw CliError(kExitFailure, "demo session " + std::to_string(id) + ": " + std::to_string(tc.wrong_pose) +
-                                         " points stored away from their pose (first: " + tc.first_wrong + "), " +
-                                         std::to_string(tc.stored_twice) + " samples stored twice");
+        throw Error(ErrorCategory::failed, "demo session " + std::to_string(id) + ": " + std::to_string(tc.wrong_pose) +
+                                               " points stored away from their pose (first: " + tc.first_wrong + "), " +
+                                               std::to_string(tc.stored_twice) + " samples stored twice");
 
     int code = kExitOk;
     std::string compensation_text;  // printed after the session's tables
@@ -392,14 +393,14 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         }
     }
 #else
-    if (o.compensate) throw CliError(kExitFailure, "--compensate: this build has no compensation demo");
+    if (o.compensate) throw Error(ErrorCategory::failed, "--compensate: this build has no compensation demo");
 #endif
     if (!o.report.empty()) {
 #ifdef BALLBAR_HAVE_REPORT
         write_output(o.report, "--report", report::render_pdf_bytes(report::build_report(store, id)), inputs);
         out["report"] = o.report;
 #else
-        throw CliError(kExitFailure, "--report: this build has no report module");
+        throw Error(ErrorCategory::failed, "--report: this build has no report module");
 #endif
     }
     if (o.json) {

@@ -57,24 +57,25 @@ Inputs load_inputs(const DiscoverOptions& o, const Globals& globals, std::unique
             try {
                 in.sets.push_back(storage::read_readings_file(arg).set);
             } catch (const storage::ReadingsFileError& e) {
-                throw CliError(kExitUsage, arg + ": " + e.what());
+                throw Error(ErrorCategory::bad_input, arg + ": " + e.what());
             }
             in.names.push_back(arg);
             continue;
         }
         if (!std::filesystem::exists(arg, ec) && !looks_like_session_key(arg))
-            throw CliError(kExitUsage, "no such file: " + arg);
+            throw Error(ErrorCategory::bad_input, "no such file: " + arg);
         // Sessions are read from an existing database only (a mistyped --db is not a new file).
         if (!store) store = std::make_unique<storage::Store>(existing_db_path(globals));
         std::int64_t id = 0;
         try {
             id = store->find_session(arg);
         } catch (const storage::StorageError& e) {
-            throw CliError(kExitUsage, "'" + arg + "' is neither a readings file nor a session: " + e.what());
+            throw Error(ErrorCategory::bad_input,
+                        "'" + arg + "' is neither a readings file nor a session: " + e.what());
         }
         in.sets.push_back(storage::load_readings(*store, id));
         if (in.sets.back().readings.empty())
-            throw CliError(kExitUsage, "session " + std::to_string(id) + " has no readings");
+            throw Error(ErrorCategory::bad_input, "session " + std::to_string(id) + " has no readings");
         in.sessions.push_back(id);
         in.names.push_back("session " + std::to_string(id));
     }
@@ -362,26 +363,26 @@ int run_discover(const DiscoverOptions& o, const Globals& globals) {
     try {
         set = ba::merge_readings(std::move(in.sets));  // moved: the readings are held once
     } catch (const ba::AnalysisError& e) {
-        throw CliError(kExitUsage, std::string("cannot combine the inputs: ") + e.what());
+        throw Error(ErrorCategory::bad_input, std::string("cannot combine the inputs: ") + e.what());
     }
     ba::DiscoveryOptions opt;
     if (o.noise_um) {
         if (!(*o.noise_um > 0) || !std::isfinite(*o.noise_um))
-            throw CliError(kExitUsage, "--noise-um: must be a positive number of micrometres");
+            throw Error(ErrorCategory::bad_input, "--noise-um: must be a positive number of micrometres");
         opt.noise_mm = *o.noise_um * 1e-3;
     }
     if (!o.model.empty()) {
         try {
             opt.base_model = ba::parse_model(o.model, set.machine.type);
         } catch (const ba::AnalysisError& e) {
-            throw CliError(kExitUsage, std::string("--model: ") + e.what());
+            throw Error(ErrorCategory::bad_input, std::string("--model: ") + e.what());
         }
     }
     ba::DiscoveryResult r;
     try {
         r = ba::discover(set, opt);
     } catch (const ba::AnalysisError& e) {
-        throw CliError(kExitFailure, std::string("discovery failed: ") + e.what());
+        throw Error(ErrorCategory::failed, std::string("discovery failed: ") + e.what());
     }
     if (store && !in.sessions.empty()) {
         const std::string name = !o.save_model.empty()

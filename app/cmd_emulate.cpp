@@ -11,8 +11,9 @@
 
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/emulator_host.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
 #include "command.hpp"
-#include "gauge_source.hpp"
+#include "gauge_commands.hpp"
 #include "interrupt.hpp"
 
 namespace {
@@ -33,21 +34,23 @@ struct EmulateOptions {
 
 int run_emulate(const EmulateOptions& o) {
     using namespace ballbar;
-    using ballbar::app::CliError;
-    if (o.pty == (o.tcp_port >= 0)) throw CliError(app::kExitUsage, "give exactly one of --pty and --tcp PORT");
+    using ballbar::app::Error;
+    using ballbar::app::ErrorCategory;
+    if (o.pty == (o.tcp_port >= 0)) throw Error(ErrorCategory::bad_input, "give exactly one of --pty and --tcp PORT");
     if (!o.link.empty()) {
-        if (!o.pty) throw CliError(app::kExitUsage, "--link is for --pty: it links to the pseudo-terminal");
+        if (!o.pty) throw Error(ErrorCategory::bad_input, "--link is for --pty: it links to the pseudo-terminal");
         std::error_code ec;
         const auto st = std::filesystem::symlink_status(o.link, ec);
         if (!ec && std::filesystem::exists(st))
-            throw CliError(app::kExitUsage, "--link " + o.link +
-                                                ": something is already there; ballbar emulate makes a new link "
-                                                "only and never replaces a file or link it did not make (remove "
-                                                "it, or choose another path)");
+            throw Error(ErrorCategory::bad_input, "--link " + o.link +
+                                                      ": something is already there; ballbar emulate makes a new link "
+                                                      "only and never replaces a file or link it did not make (remove "
+                                                      "it, or choose another path)");
     }
     if (!o.instrument.empty() && o.instrument != "ballbar") {
-        if (!o.pty) throw CliError(app::kExitUsage, "--instrument " + o.instrument + " is served on --pty only");
-        if (!o.link.empty()) throw CliError(app::kExitUsage, "--link is for the ball-bar emulator, not a gauge's");
+        if (!o.pty) throw Error(ErrorCategory::bad_input, "--instrument " + o.instrument + " is served on --pty only");
+        if (!o.link.empty())
+            throw Error(ErrorCategory::bad_input, "--link is for the ball-bar emulator, not a gauge's");
         return app::run_gauge_emulate(o.instrument, o.faults, o.seed.value_or(1), o.rate_hz);
     }
     device::EmulatorConfig cfg;
@@ -55,7 +58,7 @@ int run_emulate(const EmulateOptions& o) {
         try {
             cfg = device::load_emulator_config(o.config);
         } catch (const std::invalid_argument& e) {
-            throw CliError(app::kExitUsage, e.what());
+            throw Error(ErrorCategory::bad_input, e.what());
         }
     }
     if (o.seed) cfg.seed = *o.seed;
@@ -85,7 +88,7 @@ int run_emulate(const EmulateOptions& o) {
             },
             o.link);
     } else {
-        if (o.tcp_port > 65535) throw CliError(app::kExitUsage, "--tcp PORT must be 0..65535");
+        if (o.tcp_port > 65535) throw Error(ErrorCategory::bad_input, "--tcp PORT must be 0..65535");
         device::TcpListener listener(static_cast<std::uint16_t>(o.tcp_port));
         std::cout << "tcp:127.0.0.1:" << listener.port() << std::endl;
         host.run_tcp(listener);

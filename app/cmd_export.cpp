@@ -12,7 +12,6 @@
 #include "ballbar/storage/trace_file.hpp"
 #include "command.hpp"
 #include "files.hpp"
-#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -37,7 +36,8 @@ int run_export(const ExportOptions& o, const Globals& globals) {
         if (o.format == "readings") {
             const auto info = store.session(id);
             const auto set = storage::load_readings(store, id);
-            if (set.readings.empty()) throw CliError(kExitFailure, "session " + std::to_string(id) + " has no points");
+            if (set.readings.empty())
+                throw Error(ErrorCategory::failed, "session " + std::to_string(id) + " has no points");
             write_text(o.out, storage::format_readings(set, storage::readings_metadata(info)));
         } else if (o.format == "trace") {
             std::string text;
@@ -46,13 +46,14 @@ int run_export(const ExportOptions& o, const Globals& globals) {
             } catch (const storage::StorageError&) {
                 throw;
             } catch (const std::runtime_error& e) {
-                throw CliError(kExitFailure, e.what());
+                throw Error(ErrorCategory::failed, e.what());
             }
             write_text(o.out, text);
         } else if (o.format == "json") {
             write_text(o.out, storage::session_json(store, id) + "\n");
         } else {
-            if (o.out == "-") throw CliError(kExitUsage, "--format csv writes two files: give --out DIRECTORY");
+            if (o.out == "-")
+                throw Error(ErrorCategory::bad_input, "--format csv writes two files: give --out DIRECTORY");
             for (const char* name : {"points.csv", "samples.csv"})
                 fileio::check_output((std::filesystem::path(o.out) / name).string(), "--out", inputs);
             storage::export_csv(store, id, o.out);
@@ -61,7 +62,7 @@ int run_export(const ExportOptions& o, const Globals& globals) {
             std::cerr << "ballbar: exported session " << id << " (" << o.format << ") to " << o.out << '\n';
         return kExitOk;
     } catch (const storage::StorageError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
 }
 

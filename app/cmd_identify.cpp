@@ -50,7 +50,8 @@ std::vector<ba::Param> parse_params(const std::vector<std::string>& names, ba::M
         if (!p) {
             std::string known;
             for (const auto& info : ba::all_params()) known += (known.empty() ? "" : " ") + std::string(info.name);
-            throw CliError(kExitUsage, "--params: unknown parameter '" + n + "' (known: " + known + ", all, base)");
+            throw Error(ErrorCategory::bad_input,
+                        "--params: unknown parameter '" + n + "' (known: " + known + ", all, base)");
         }
         out.push_back(*p);
     }
@@ -125,13 +126,13 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     for (const std::string& in : args.inputs) {
         std::error_code ec;
         if (!std::filesystem::exists(in, ec) && !looks_like_session_key(in))
-            throw CliError(kExitUsage, "no such file: " + in);
+            throw Error(ErrorCategory::bad_input, "no such file: " + in);
         // Anything at that path is a file to read (fileio says when it is a directory or a FIFO).
         if (std::filesystem::exists(std::filesystem::symlink_status(in, ec))) {
             try {
                 sets.push_back(bs::read_readings_file(in).set);
             } catch (const bs::ReadingsFileError& e) {
-                throw CliError(kExitUsage, in + ": " + e.what());
+                throw Error(ErrorCategory::bad_input, in + ": " + e.what());
             }
         } else {
             bs::Store& st = open_store(false);
@@ -139,7 +140,8 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
             try {
                 id = st.find_session(in);
             } catch (const bs::StorageError& e) {
-                throw CliError(kExitUsage, "'" + in + "' is neither a readings file nor a session: " + e.what());
+                throw Error(ErrorCategory::bad_input,
+                            "'" + in + "' is neither a readings file nor a session: " + e.what());
             }
             sets.push_back(bs::load_readings(st, id));
             sessions.push_back(id);
@@ -149,7 +151,7 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     try {
         readings = ba::merge_readings(std::move(sets));
     } catch (const ba::AnalysisError& e) {
-        throw CliError(kExitUsage, e.what());
+        throw Error(ErrorCategory::bad_input, e.what());
     }
     ba::FitOptions fo;
     fo.free_params = parse_params(args.params, readings.machine.type);
@@ -159,7 +161,7 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     } catch (const ba::AnalysisError& e) {
         // Valid readings that cannot support the fit (too few for the unknowns): the operation failed,
         // as in `discover`.
-        throw CliError(kExitFailure, std::string("identification failed: ") + e.what());
+        throw Error(ErrorCategory::failed, std::string("identification failed: ") + e.what());
     }
 
     json out = summary_json(fit);

@@ -45,9 +45,9 @@ std::vector<std::int64_t> check_duplicate(storage::Store& store, const Content& 
                        first.imported_at + ")";
     if (before.size() > 1) what += " and " + std::to_string(before.size() - 1) + " more";
     if (!o.allow_duplicate)
-        throw CliError(kExitUsage, o.file + ": the same content (SHA-256 " + c.sha256.substr(0, 12) +
-                                       "…) was already imported as " + what +
-                                       "; nothing imported (--allow-duplicate imports it again)");
+        throw Error(ErrorCategory::bad_input, o.file + ": the same content (SHA-256 " + c.sha256.substr(0, 12) +
+                                                  "…) was already imported as " + what +
+                                                  "; nothing imported (--allow-duplicate imports it again)");
     std::cerr << "ballbar: warning: " << o.file << ": the same content as " << what
               << ", imported again (--allow-duplicate)\n";
     return ids;
@@ -86,7 +86,7 @@ int run_import(const ImportOptions& o, const Globals& globals) {
             c.bytes += static_cast<std::int64_t>(bytes.size());
         }));
     } catch (const storage::ReadingsFileError& e) {
-        throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
+        throw Error(ErrorCategory::bad_input, o.file + ": " + e.what() + " (nothing imported)");
     }
     storage::ImportedReadings r;
     try {
@@ -95,7 +95,7 @@ int run_import(const ImportOptions& o, const Globals& globals) {
         try {
             r = storage::import_readings_stream(store, *stream, o.file);
         } catch (const storage::ReadingsFileError& e) {
-            throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
+            throw Error(ErrorCategory::bad_input, o.file + ": " + e.what() + " (nothing imported)");
         }
         // The whole file has been read (and hashed) now that it proved a readings file; a duplicate rolls
         // the import back.
@@ -122,7 +122,7 @@ int run_import(const ImportOptions& o, const Globals& globals) {
         }
         return kExitOk;
     } catch (const storage::StorageError& e) {
-        throw CliError(kExitFailure, std::string(e.what()) + " (nothing imported)");
+        throw Error(ErrorCategory::failed, std::string(e.what()) + " (nothing imported)");
     }
 }
 
@@ -137,9 +137,9 @@ int run_import_trace(const ImportOptions& o, const Globals& globals) {
         c.sha256 = storage::sha256_hex(text);
         c.bytes = static_cast<std::int64_t>(text.size());
     } catch (const fileio::FileError& e) {
-        throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
+        throw Error(ErrorCategory::bad_input, o.file + ": " + e.what() + " (nothing imported)");
     } catch (const storage::TraceFileError& e) {
-        throw CliError(kExitUsage, o.file + ": " + e.what() + " (nothing imported)");
+        throw Error(ErrorCategory::bad_input, o.file + ": " + e.what() + " (nothing imported)");
     }
     for (const auto& w : trace.warnings) std::cerr << "ballbar: warning: " << o.file << ": " << w << '\n';
     try {
@@ -165,7 +165,7 @@ int run_import_trace(const ImportOptions& o, const Globals& globals) {
         }
         return kExitOk;
     } catch (const storage::StorageError& e) {
-        throw CliError(kExitFailure, std::string(e.what()) + " (nothing imported)");
+        throw Error(ErrorCategory::failed, std::string(e.what()) + " (nothing imported)");
     }
 }
 

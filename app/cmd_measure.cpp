@@ -11,19 +11,18 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "acquisition_adapters.hpp"
 #include "ballbar/acquisition/bar_check.hpp"
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/gauge.hpp"
 #include "ballbar/device/uri.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
+#include "ballbar/workflow/session_io.hpp"
 #include "command.hpp"
 #include "files.hpp"
-#include "gauge_source.hpp"
 #include "interrupt.hpp"
 #include "operators.hpp"
-#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -103,7 +102,7 @@ std::vector<fileio::Protected> measure_inputs(const MeasureOptions& o, const std
 
 /// --dry-run: plan, check and write the NC program; no instrument, no database.
 int dry_run(const MeasureOptions& o, const Globals& globals) {
-    if (o.machine_file.empty()) throw CliError(kExitUsage, "--machine FILE is required");
+    if (o.machine_file.empty()) throw Error(ErrorCategory::bad_input, "--machine FILE is required");
     try {
         const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
         const acq::PlanSpec spec =
@@ -111,8 +110,8 @@ int dry_run(const MeasureOptions& o, const Globals& globals) {
                                 : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
         const acq::Plan plan = acq::make_plan(machine, spec);
         if (o.from_point >= plan.points.size())
-            throw CliError(kExitUsage, "--from-point " + std::to_string(o.from_point) + ": the plan has " +
-                                           std::to_string(plan.points.size()) + " points");
+            throw Error(ErrorCategory::bad_input, "--from-point " + std::to_string(o.from_point) + ": the plan has " +
+                                                      std::to_string(plan.points.size()) + " points");
         const std::string text = acq::write_plan_program(plan, o.from_point);
         if (o.program_file.empty()) {
             std::cout << text;
@@ -123,7 +122,7 @@ int dry_run(const MeasureOptions& o, const Globals& globals) {
                   << " points within the travel; NC program written to " << o.program_file << "\n";
         return kExitOk;
     } catch (const acq::PlanError& e) {
-        throw CliError(kExitUsage, e.what());
+        throw Error(ErrorCategory::bad_input, e.what());
     }
 }
 
@@ -138,7 +137,7 @@ void check_device_uri(const std::string& uri) {
             (void)device::load_emulator_config(d.path);
         }
     } catch (const std::invalid_argument& e) {
-        throw CliError(kExitUsage, "--device: " + std::string(e.what()));
+        throw Error(ErrorCategory::bad_input, "--device: " + std::string(e.what()));
     }
 }
 
@@ -146,16 +145,16 @@ void check_device_uri(const std::string& uri) {
 /// line leaves no session and creates no database (docs/cli.md).
 void check_command_line(const MeasureOptions& o) {
     if (o.resume.empty() && o.machine_file.empty())
-        throw CliError(kExitUsage, "--machine FILE is required (or --resume SESSION)");
-    if (o.device.empty()) throw CliError(kExitUsage, "--device URI is required");
+        throw Error(ErrorCategory::bad_input, "--machine FILE is required (or --resume SESSION)");
+    if (o.device.empty()) throw Error(ErrorCategory::bad_input, "--device URI is required");
     check_device_uri(o.device);
     // The terminal operator asks its questions on standard input; a script or a CI job has none to
     // answer them (they would read end-of-file as "no" and stop the session).
     if (!o.json && !o.non_interactive && !::isatty(STDIN_FILENO))
-        throw CliError(kExitUsage,
-                       "standard input is not a terminal, so nobody can answer measure's questions: add "
-                       "--non-interactive (the answers of the plan file's \"answers\") or --json (answers as JSON "
-                       "lines on standard input)");
+        throw Error(ErrorCategory::bad_input,
+                    "standard input is not a terminal, so nobody can answer measure's questions: add "
+                    "--non-interactive (the answers of the plan file's \"answers\") or --json (answers as JSON "
+                    "lines on standard input)");
 }
 
 /// The plan of a new session, from --machine and --plan (exit 2 when either is malformed).
@@ -170,7 +169,7 @@ acq::Plan new_plan(const MeasureOptions& o) {
         (void)acq::write_plan_program(plan, 0);  // every NC word in the controller's format, before a session
         return plan;
     } catch (const acq::PlanError& e) {
-        throw CliError(kExitUsage, e.what());
+        throw Error(ErrorCategory::bad_input, e.what());
     }
 }
 
@@ -181,7 +180,7 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         try {
             fileio::check_output(o.program_file, "--program", measure_inputs(o, resolve_db_path(globals)));
         } catch (const fileio::FileError& e) {
-            throw cli_error(e);
+            throw as_error(e);
         }
     }
     std::int64_t id = 0;
@@ -194,24 +193,24 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         try {
             id = opened->find_session(o.resume);
         } catch (const storage::StorageError& e) {
-            throw cli_error(e);  // no such session: exit 2, as `sessions show` says it
+            throw as_error(e);  // no such session: exit 2, as `sessions show` says it
         }
         const storage::SessionInfo before = opened->session(id);  // why it stopped, shown first
         std::cout << "Session " << id << " is " << storage::to_string(before.state)
                   << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
         try {
-            plan = load_plan(*opened, id);
+            plan = workflow::load_plan(*opened, id);
         } catch (const acq::PlanError& e) {
-            throw CliError(kExitUsage, e.what());
+            throw Error(ErrorCategory::bad_input, e.what());
         }
-        done = load_points(*opened, id, plan);
+        done = workflow::load_points(*opened, id, plan);
         try {
             opened->resume_session(id);
         } catch (const storage::StorageError& e) {
             // A completed or aborted session, or one another process is measuring: the request
             // contradicts the session's state, a bad command line (exit 2) that changes nothing.
             if (e.kind() != storage::StorageError::Kind::invalid) throw;
-            throw CliError(kExitUsage, e.what());
+            throw Error(ErrorCategory::bad_input, e.what());
         }
     } else {
         plan = new_plan(o);
@@ -224,7 +223,7 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         ns.procedure = "ssm-two-step";
         id = opened->create_session(ns);
         opened->start_session(id);
-        store_plan(*opened, id, plan);
+        workflow::store_plan(*opened, id, plan);
     }
     storage::Store& store = *opened;
     std::cout << "Session " << id << (done.empty() ? "" : " (resumed after " + std::to_string(done.size()) + " points)")
@@ -241,7 +240,7 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     else
         op = std::make_unique<TerminalOperator>(std::cin, std::cout, globals.color, plan, program);
     const std::string uri = o.device;
-    DeviceSource source([uri] {
+    workflow::DeviceSource source([uri] {
         try {
             return device::open_transport(uri);
         } catch (const std::invalid_argument& e) {
@@ -254,17 +253,17 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
                                                               plan.spec.capture.tolerance_mm, o.plan_file);
         if (!mismatch.empty()) throw acq::InstrumentUnfit(mismatch);
     };
-    StoreSink sink(store, id, plan);
+    workflow::StoreSink sink(store, id, plan);
     const InterruptGuard interrupt;  // Ctrl-C: stop, store, stay resumable, exit 3
     acq::SessionOptions options;
     options.stop = InterruptGuard::flag();
-    const auto gauge = make_gauge_source(uri, plan.spec.bar_length_mm);  // a digital gauge (gauge_source.hpp)
+    const auto gauge = workflow::make_gauge_source(uri, plan.spec.bar_length_mm);  // a digital gauge (gauge_source.hpp)
     acq::Session session(plan, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, *op, options);
     session.restore(done);
     const std::uint64_t first_seq = store.next_seq(id);  // this run's samples (a resume continues after)
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);
-    if (gauge) store_gauge_instrument(store, id, *gauge, first_seq);  // identity, resolution, rate
+    if (gauge) workflow::store_gauge_instrument(store, id, *gauge, first_seq);  // identity, resolution, rate
     if (sum.interrupted) {
         std::string retry;
         if (!sum.missing.empty()) {
@@ -277,11 +276,10 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
             } catch (const std::exception&) {
             }
         }
-        throw CliError(kExitInterrupted, "session " + std::to_string(id) + " interrupted after " +
-                                             std::to_string(sum.samples) + " samples (" + sum.reason +
-                                             "); everything measured is stored" + retry +
-                                             ". Continue it with: ballbar measure --resume " + std::to_string(id) +
-                                             " --device " + o.device);
+        throw Error(ErrorCategory::interrupted,
+                    "session " + std::to_string(id) + " interrupted after " + std::to_string(sum.samples) +
+                        " samples (" + sum.reason + "); everything measured is stored" + retry +
+                        ". Continue it with: ballbar measure --resume " + std::to_string(id) + " --device " + o.device);
     }
     if (sum.final_state == acq::State::Done) {
         if (o.json) {
@@ -298,8 +296,8 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     // Not interrupted: a point that failed its checks with the answer "abort" (the plan's in CI), results
     // not accepted, a set-up not confirmed. The measurement failed (exit 1); 3 is only an interruption.
     if (sum.final_state == acq::State::Aborted)
-        throw CliError(kExitFailure, "session " + std::to_string(id) + " aborted: " + sum.reason);
-    throw CliError(kExitFailure, "session " + std::to_string(id) + " failed: " + sum.reason);
+        throw Error(ErrorCategory::failed, "session " + std::to_string(id) + " aborted: " + sum.reason);
+    throw Error(ErrorCategory::failed, "session " + std::to_string(id) + " failed: " + sum.reason);
 }
 
 }  // namespace

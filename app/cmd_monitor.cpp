@@ -15,8 +15,9 @@
 #include "ballbar/device/gauge.hpp"
 #include "ballbar/device/instrument.hpp"
 #include "ballbar/device/uri.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
 #include "command.hpp"
-#include "gauge_source.hpp"
+#include "gauge_commands.hpp"
 #include "interrupt.hpp"
 
 namespace {
@@ -52,7 +53,8 @@ struct Summary {
 
 int run_monitor(const MonitorOptions& o) {
     using namespace ballbar;
-    using app::CliError;
+    using app::Error;
+    using app::ErrorCategory;
     using namespace std::chrono;
     if (device::gauge::is_gauge_uri(o.device))  // a digital gauge (docs/instruments.md)
         return app::run_gauge_monitor(o.device, o.seconds, o.json, o.rate_hz.value_or(20));
@@ -63,7 +65,7 @@ int run_monitor(const MonitorOptions& o) {
     try {
         inst = std::make_unique<device::Instrument>(device::open_transport(o.device));
     } catch (const std::invalid_argument& e) {
-        throw CliError(app::kExitUsage, e.what());
+        throw Error(ErrorCategory::bad_input, e.what());
     }
     Summary sum;
     device::InstrumentInfo info;
@@ -146,7 +148,7 @@ int run_monitor(const MonitorOptions& o) {
                   << sum.mean << " mm, std " << sum.std_mm() * 1e3 << " µm\n";
     }
     if (!failure.empty()) {
-        throw CliError(app::kExitFailure, disconnected ? "instrument disconnected: " + failure : failure);
+        throw Error(ErrorCategory::failed, disconnected ? "instrument disconnected: " + failure : failure);
     }
     return app::InterruptGuard::requested() ? app::kExitInterrupted : app::kExitOk;
 }

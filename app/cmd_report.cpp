@@ -16,7 +16,6 @@
 #include "ballbar/version.hpp"
 #include "command.hpp"
 #include "files.hpp"
-#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -29,13 +28,14 @@ struct ReportOptions {
 };
 
 int run_report(const ReportOptions& o, const Globals& globals) {
-    if (o.out.empty() && !o.json) throw CliError(kExitUsage, "nothing to write: give --out FILE.pdf and/or --json");
+    if (o.out.empty() && !o.json)
+        throw Error(ErrorCategory::bad_input, "nothing to write: give --out FILE.pdf and/or --json");
     const auto inputs = database_files(globals);
     if (!o.out.empty()) {
         try {
             fileio::check_output(o.out, "--out", inputs);  // before any work
         } catch (const fileio::FileError& e) {
-            throw cli_error(e);
+            throw as_error(e);
         }
     }
     storage::StoreOptions so;
@@ -46,24 +46,24 @@ int run_report(const ReportOptions& o, const Globals& globals) {
     try {
         store = std::make_unique<storage::Store>(db, so);
     } catch (const storage::StorageError& e) {
-        throw CliError(kExitFailure, "cannot open " + db + ": " + e.what());
+        throw Error(ErrorCategory::failed, "cannot open " + db + ": " + e.what());
     }
     note_database_damage(store->damage());
     std::int64_t id = 0;
     try {
         id = store->find_session(o.session);
     } catch (const storage::StorageError& e) {
-        throw cli_error(e);  // "no session \"99\"" (exit 2), once
+        throw as_error(e);  // "no session \"99\"" (exit 2), once
     }
     report::BuildOptions bo;
     bo.software_version = kVersion;
     if (o.tolerance_um && !(*o.tolerance_um > 0.0 && std::isfinite(*o.tolerance_um)))
-        throw CliError(kExitUsage, "--tolerance must be a circular deviation > 0, µm");
+        throw Error(ErrorCategory::bad_input, "--tolerance must be a circular deviation > 0, µm");
     report::Report r;
     try {
         r = report::build_report(*store, id, bo);
     } catch (const report::ReportError& e) {
-        throw CliError(kExitFailure, "session " + std::to_string(id) + ": " + e.what());
+        throw Error(ErrorCategory::failed, "session " + std::to_string(id) + ": " + e.what());
     }
     if (o.tolerance_um) report::set_circular_tolerance(r, *o.tolerance_um);
     if (!o.out.empty()) {
@@ -72,7 +72,7 @@ int run_report(const ReportOptions& o, const Globals& globals) {
         try {
             pdf = report::render_pdf_bytes(r, &pages);
         } catch (const report::ReportError& e) {
-            throw CliError(kExitFailure, e.what());
+            throw Error(ErrorCategory::failed, e.what());
         }
         write_output(o.out, "--out", pdf, inputs);
         std::cerr << "ballbar: wrote " << o.out << " (" << pages << (pages == 1 ? " page" : " pages") << ")\n";

@@ -14,7 +14,6 @@
 #include "command.hpp"
 #include "figures.hpp"
 #include "files.hpp"
-#include "storage_errors.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -222,7 +221,7 @@ int run(const SessionsOptions& o, const Globals& globals, bool show) {
     try {
         code = show ? show_session(o, globals, text) : list_sessions(o, globals, text);
     } catch (const storage::StorageError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
     const bool json = show ? o.show_json : o.json;
     std::cout << (json ? text.str() : printable(text.str(), true));

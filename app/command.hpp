@@ -9,6 +9,8 @@
 #include <string>
 #include <string_view>
 
+#include "ballbar/workflow/error.hpp"
+
 namespace ballbar::app {
 
 /// Exit codes of the `ballbar` command (the table in docs/cli.md).
@@ -19,15 +21,31 @@ enum ExitCode : int {
     kExitInterrupted = 3,  ///< stopped by the operator (Ctrl-C); what was measured is stored
 };
 
-/// An error that the CLI reports as "ballbar: <message>" with the given exit code.
-class CliError : public std::runtime_error {
-  public:
-    CliError(int code, const std::string& message) : std::runtime_error(message), code_(code) {}
-    int code() const { return code_; }
+/// Errors are the workflow layer's (a message and a category); the CLI reports each as
+/// "ballbar: error: <message>" and exits with the code of its category.
+using workflow::Error;
+using workflow::ErrorCategory;
 
-  private:
-    int code_;
-};
+/// The exit code of an error of `category`: the one place the CLI decides it (the table in docs/cli.md).
+constexpr int exit_code(ErrorCategory category) {
+    switch (category) {
+        case ErrorCategory::bad_input:
+        case ErrorCategory::not_found:
+            return kExitUsage;
+        case ErrorCategory::interrupted:
+            return kExitInterrupted;
+        case ErrorCategory::device:
+        case ErrorCategory::failed:
+        case ErrorCategory::internal:
+            return kExitFailure;
+    }
+    return kExitFailure;
+}
+
+/// A library's error as the workflow layer's, its category sorted once (workflow::category_of).
+inline Error as_error(const std::exception& e) {
+    return Error(workflow::category_of(e), e.what());
+}
 
 /// Options every subcommand shares.
 struct Globals {
@@ -68,7 +86,7 @@ std::string resolve_db_path(const Globals& globals);
 
 /// The database path for a command that only reads sessions from it: like resolve_db_path, but a
 /// database that does not exist is the user's mistake (a mistyped --db), never created.
-/// Throws CliError(kExitUsage) naming the path.
+/// Throws Error (not found) naming the path.
 std::string existing_db_path(const Globals& globals);
 
 /// A reader found its database damaged (storage::Store::damage(), not empty): says so on stderr at once,
@@ -81,7 +99,7 @@ void note_database_damage(const std::string& damage);
 bool looks_like_session_key(std::string_view arg);
 
 /// The whole of a JSON input file, at most fileio::kMaxJsonBytes (app/files.cpp). Throws
-/// CliError(kExitUsage) naming `what` ("machine file") when it cannot be read or is refused.
+/// Error (bad input) naming `what` ("machine file") when it cannot be read or is refused.
 std::string read_file(const std::string& path, const char* what);
 
 }  // namespace ballbar::app

@@ -5,10 +5,6 @@
 
 namespace ballbar::app {
 
-CliError cli_error(const fileio::FileError& e) {
-    return CliError(e.kind() == fileio::FileError::Kind::refused ? kExitUsage : kExitFailure, e.what());
-}
-
 std::string readable_message(std::string_view message) {
     std::string out;
     std::size_t i = 0;
@@ -49,7 +45,7 @@ std::string read_file(const std::string& path, const char* what) {
     try {
         return fileio::read_json(path, what);
     } catch (const fileio::FileError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
 }
 
@@ -57,7 +53,7 @@ std::string read_program_file(const std::string& path, const char* what) {
     try {
         return fileio::read_text(path, what);
     } catch (const fileio::FileError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
 }
 
@@ -75,7 +71,7 @@ void write_output(const std::string& path, std::string_view option, std::string_
     try {
         fileio::write_file(path, option, text, inputs);
     } catch (const fileio::FileError& e) {
-        throw cli_error(e);
+        throw as_error(e);
     }
 }
 

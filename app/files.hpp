@@ -14,9 +14,6 @@
 
 namespace ballbar::app {
 
-/// The CliError for a FileError (refused: kExitUsage, failed: kExitFailure).
-CliError cli_error(const fileio::FileError& e);
-
 /// An error message as the operator sees it: any run of non-blank characters longer than 120 bytes (a
 /// malformed token echoed from a file) is cut to 40 with "…", and the whole to 2000 bytes.
 std::string readable_message(std::string_view message);

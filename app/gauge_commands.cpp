@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The gauge paths of `ballbar monitor` and `ballbar emulate`, and `ballbar udev-rules` (the gauge udev
 // rules from the ID table).
+#include "gauge_commands.hpp"
+
 #include <unistd.h>
 
 #include <chrono>
@@ -14,8 +16,8 @@
 
 #include "ballbar/device/gauge_emulator.hpp"
 #include "ballbar/device/ids.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
 #include "command.hpp"
-#include "gauge_source.hpp"
 #include "interrupt.hpp"
 
 namespace ballbar::app {
@@ -35,9 +37,9 @@ int run_gauge_monitor(const std::string& uri, double seconds, bool json, double 
         sampler = std::make_unique<gg::GaugeSampler>(gg::open_gauge(uri), bar);
         id = sampler->identify();
     } catch (const std::invalid_argument& e) {
-        throw CliError(kExitUsage, e.what());
+        throw Error(ErrorCategory::bad_input, e.what());
     } catch (const device::DeviceError& e) {
-        throw CliError(kExitFailure, e.what());
+        throw Error(ErrorCategory::failed, e.what());
     }
     if (!json)
         std::cout << id.maker << " " << id.model << (id.serial.empty() ? "" : " serial " + id.serial)
@@ -102,7 +104,7 @@ int run_gauge_monitor(const std::string& uri, double seconds, bool json, double 
                   << " µm; not ready " << st.not_ready << ", out of range " << st.out_of_range << ", no reply "
                   << st.timeouts << ", invalid " << st.invalid << "\n";
     }
-    if (!failure.empty()) throw CliError(kExitFailure, failure);
+    if (!failure.empty()) throw Error(ErrorCategory::failed, failure);
     return InterruptGuard::requested() ? kExitInterrupted : kExitOk;
 }
 
@@ -123,7 +125,7 @@ gg::GaugeFaults parse_faults(const std::string& spec) {
                 p = std::stod(item.substr(eq + 1), &used);
                 if (used != item.size() - eq - 1 || !(p >= 0 && p <= 1)) throw std::invalid_argument("range");
             } catch (const std::exception&) {
-                throw CliError(kExitUsage, "--faults: '" + item + "': a probability must be 0..1");
+                throw Error(ErrorCategory::bad_input, "--faults: '" + item + "': a probability must be 0..1");
             }
         }
         if (key == "inch" && eq == std::string::npos) {
@@ -139,8 +141,9 @@ gg::GaugeFaults parse_faults(const std::string& spec) {
         } else if (key == "cut-off" && eq != std::string::npos) {
             f.cut_off_probability = p;
         } else {
-            throw CliError(kExitUsage, "--faults: unknown item '" + item +
-                                           "' (not-ready=P, out-of-range=P, no-reply=P, cut-off=P, inch, low-battery)");
+            throw Error(ErrorCategory::bad_input,
+                        "--faults: unknown item '" + item +
+                            "' (not-ready=P, out-of-range=P, no-reply=P, cut-off=P, inch, low-battery)");
         }
     }
     return f;
@@ -150,11 +153,12 @@ gg::GaugeFaults parse_faults(const std::string& spec) {
 
 int run_gauge_emulate(const std::string& kind_name, const std::string& faults, std::uint64_t seed, double rate_hz) {
     const auto kind = gg::parse_kind(kind_name);
-    if (!kind) throw CliError(kExitUsage, "--instrument must be sylvac, digimatic or modbus (serial gauges)");
+    if (!kind)
+        throw Error(ErrorCategory::bad_input, "--instrument must be sylvac, digimatic or modbus (serial gauges)");
     if (*kind == gg::Kind::MitutoyoItn)
-        throw CliError(kExitUsage,
-                       "--instrument mitutoyo-itn is a USB device: it has no pty emulator (use `ballbar demo "
-                       "--instrument mitutoyo-itn`)");
+        throw Error(ErrorCategory::bad_input,
+                    "--instrument mitutoyo-itn is a USB device: it has no pty emulator (use `ballbar demo "
+                    "--instrument mitutoyo-itn`)");
     gg::GaugeEmulatorConfig cfg;
     cfg.kind = *kind;
     cfg.seed = seed;

@@ -12,15 +12,16 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "acquisition_adapters.hpp"
 #include "ballbar/acquisition/compute.hpp"
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/device/gauge_emulator.hpp"
 #include "ballbar/device/sim_machine.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
+#include "ballbar/workflow/session_io.hpp"
 #include "command.hpp"
-#include "gauge_source.hpp"
+#include "gauge_commands.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -68,9 +69,9 @@ json vec3(const ba::Vec3& v) {
 
 int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     const auto kind = gg::parse_kind(o.instrument);
-    if (!kind) throw CliError(kExitUsage, "--instrument must be sylvac, mitutoyo-itn, digimatic or modbus");
+    if (!kind) throw Error(ErrorCategory::bad_input, "--instrument must be sylvac, mitutoyo-itn, digimatic or modbus");
     const auto type = ba::parse_machine_type(o.machine);
-    if (!type) throw CliError(kExitUsage, "--machine must be RRTTT, TTTRR or RTTTR");
+    if (!type) throw Error(ErrorCategory::bad_input, "--machine must be RRTTT, TTTRR or RTTTR");
     const acq::MachineFile machine_file = acq::seed_machine(*type);
     acq::PlanSpec spec = acq::default_plan(machine_file);
     spec.answers.operator_name = "demo";
@@ -104,7 +105,7 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     bar.calibrated_length_mm = L;
     bar.sign = gc.sign;
     bar.target_rate_hz = o.rate_hz;
-    GaugeSource source(
+    workflow::GaugeSource source(
         [&]() -> std::unique_ptr<gg::Gauge> {
             if (*kind == gg::Kind::MitutoyoItn) return gg::make_itn_gauge(gg::make_emulated_itn_link(emu, gc.serial));
             return gg::open_gauge(uri);
@@ -128,23 +129,23 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     ns.instrument = inst;
     const std::int64_t id = store.create_session(ns);
     store.start_session(id);
-    store_plan(store, id, plan);
+    workflow::store_plan(store, id, plan);
     if (!o.json)
         std::cout << "ballbar demo: " << o.machine << " (" << machine_file.geometry.name << "), " << plan.points.size()
                   << " points, on an emulated " << o.instrument << " gauge at " << o.rate_hz << " readings/s (" << uri
                   << ")\n";
 
-    StoreSink sink(store, id, plan);
+    workflow::StoreSink sink(store, id, plan);
     GaugeDemoOperator op(plan, machine, emu);
     acq::Session session(plan, source, sink, op);
     const acq::SessionSummary sum = session.run();
     // The gauge's identity, metadata, and its resolution and measured reading rate on every sample.
-    store_gauge_instrument(store, id, source, 0, /*keep_instrument=*/true);
+    workflow::store_gauge_instrument(store, id, source, 0, /*keep_instrument=*/true);
     sink.finish(sum);
     if (sum.final_state != acq::State::Done)
-        throw CliError(kExitFailure, "demo session " + std::to_string(id) + " ended " +
-                                         std::string(storage::to_string(store.session(id).state)) + ": " +
-                                         sum.reason);  // as stored (interrupted, aborted, failed)
+        throw Error(ErrorCategory::failed, "demo session " + std::to_string(id) + " ended " +
+                                               std::string(storage::to_string(store.session(id).state)) + ": " +
+                                               sum.reason);  // as stored (interrupted, aborted, failed)
 
     const auto truth = acq::true_values(plan, setup.errors);
     json out;

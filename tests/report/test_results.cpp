@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Stored result payloads, in the shapes app/acquisition_adapters.cpp, `ballbar identify` and
+// Stored result payloads, in the shapes acquisition/result_codec.hpp, `ballbar identify` and
 // `ballbar discover` write them, become report content.
 #include <gtest/gtest.h>
 

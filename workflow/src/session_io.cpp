@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "acquisition_adapters.hpp"
+#include "ballbar/workflow/session_io.hpp"
 
 #include <algorithm>
 #include <array>
@@ -13,7 +13,7 @@
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 
-namespace ballbar::app {
+namespace ballbar::workflow {
 
 using acquisition::ReadStatus;
 using acquisition::SourceError;
@@ -274,4 +274,4 @@ std::vector<acq::CapturedPoint> load_points(storage::Store& store, std::int64_t 
     return out;
 }
 
-}  // namespace ballbar::app
+}  // namespace ballbar::workflow

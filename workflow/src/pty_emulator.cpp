@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: MIT
-#include "pty_emulator.hpp"
+#include "ballbar/workflow/pty_emulator.hpp"
 
 #include <chrono>
 #include <exception>
 #include <utility>
 
-#include "command.hpp"
+#include "ballbar/workflow/error.hpp"
 
-namespace ballbar::app {
+namespace ballbar::workflow {
 
 PtyEmulator::PtyEmulator(device::EmulatorConfig config) : emu_(std::move(config)) {
     device::HostOptions ho;
@@ -41,9 +41,9 @@ void PtyEmulator::halt() {
 std::string PtyEmulator::path() {
     std::unique_lock lock(mutex_);
     if (!cv_.wait_for(lock, std::chrono::seconds(10), [this] { return !path_.empty() || !error_.empty(); }))
-        throw CliError(kExitFailure, "the emulator did not open a pseudo-terminal");
-    if (!error_.empty()) throw CliError(kExitFailure, "emulator: " + error_);
+        throw Error(ErrorCategory::device, "the emulator did not open a pseudo-terminal");
+    if (!error_.empty()) throw Error(ErrorCategory::device, "emulator: " + error_);
     return path_;
 }
 
-}  // namespace ballbar::app
+}  // namespace ballbar::workflow

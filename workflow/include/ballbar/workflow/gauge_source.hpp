@@ -2,8 +2,8 @@
 // A bar built on a digital gauge as the acquisition's SampleSource (docs/instruments.md): the gauge is
 // polled at its rate, each reading becomes a sample; the zero is set in the calibrator; the measured
 // reading rate and resolution and the gauge's identity go with the session (instrument_json()).
-// Also the gauge paths of `monitor`, `emulate --instrument` and `demo --instrument` (gauge_commands.cpp,
-// gauge_demo.cpp).
+// The CLI's gauge paths of `monitor`, `emulate --instrument` and `demo --instrument` are in app/
+// (gauge_commands.cpp, gauge_demo.cpp).
 #pragma once
 
 #include <functional>
@@ -15,7 +15,7 @@
 #include "ballbar/device/gauge.hpp"
 #include "ballbar/storage/store.hpp"
 
-namespace ballbar::app {
+namespace ballbar::workflow {
 
 class GaugeSource : public acquisition::SampleSource {
   public:
@@ -62,21 +62,4 @@ std::unique_ptr<GaugeSource> make_gauge_source(const std::string& uri, double ca
 void store_gauge_instrument(storage::Store& store, std::int64_t session_id, const GaugeSource& source,
                             std::uint64_t first_seq, bool keep_instrument = false);
 
-/// `ballbar demo --instrument KIND`: the SSM procedure on the emulated gauge sitting on the simulated
-/// machine; prints measured vs true errors like the plain demo. `db_path` as resolve_db_path gives it.
-struct GaugeDemoOptions {
-    std::string instrument;
-    std::string machine = "TTTRR";
-    std::uint64_t seed = 1;
-    double rate_hz = 20;
-    bool json = false;
-};
-int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path);
-
-/// `ballbar monitor --device GAUGE-URI`: live readings of a gauge, a summary at the end.
-int run_gauge_monitor(const std::string& uri, double seconds, bool json, double rate_hz);
-
-/// `ballbar emulate --instrument KIND --pty`: a serial gauge emulator on a pty until Ctrl-C.
-int run_gauge_emulate(const std::string& kind, const std::string& faults, std::uint64_t seed, double rate_hz);
-
-}  // namespace ballbar::app
+}  // namespace ballbar::workflow

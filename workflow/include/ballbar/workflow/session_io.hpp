@@ -16,7 +16,7 @@
 #include "ballbar/storage/sample_writer.hpp"
 #include "ballbar/storage/store.hpp"
 
-namespace ballbar::app {
+namespace ballbar::workflow {
 
 /// The instrument driver over a transport that `open` (re)creates: reconnecting opens a new link.
 /// Samples are renumbered into one contiguous host sequence across reconnects; a gap the driver
@@ -91,4 +91,4 @@ acquisition::Plan load_plan(storage::Store& store, std::int64_t session_id);
 std::vector<acquisition::CapturedPoint> load_points(storage::Store& store, std::int64_t session_id,
                                                     const acquisition::Plan& plan);
 
-}  // namespace ballbar::app
+}  // namespace ballbar::workflow

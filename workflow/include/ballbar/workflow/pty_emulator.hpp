@@ -14,7 +14,7 @@
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/emulator_host.hpp"
 
-namespace ballbar::app {
+namespace ballbar::workflow {
 
 class PtyEmulator {
   public:
@@ -24,7 +24,7 @@ class PtyEmulator {
     PtyEmulator& operator=(const PtyEmulator&) = delete;
     /// Stops serving (the emulator's state can then be read without racing its thread).
     void halt();
-    /// The current pty (a new one after a simulated disconnect); CliError when none opens in 10 s.
+    /// The current pty (a new one after a simulated disconnect); Error (device) when none opens in 10 s.
     std::string path();
     device::Emulator& emulator() { return emu_; }
 
@@ -38,4 +38,4 @@ class PtyEmulator {
     std::string path_, error_;
 };
 
-}  // namespace ballbar::app
+}  // namespace ballbar::workflow

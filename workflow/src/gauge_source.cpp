@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: MIT
-#include "gauge_source.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
 
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
-namespace ballbar::app {
+namespace ballbar::workflow {
 
 namespace acq = ballbar::acquisition;
 namespace gg = ballbar::device::gauge;
@@ -158,4 +158,4 @@ void store_gauge_instrument(storage::Store& store, std::int64_t session_id, cons
         store.set_segment_instrument(session_id, first_seq, st.resolution_mm, st.rate_hz);
 }
 
-}  // namespace ballbar::app
+}  // namespace ballbar::workflow
