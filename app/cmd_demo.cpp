@@ -1,9 +1,8 @@
 // SPDX-License-Identifier: MIT
-// `ballbar demo`: the whole guided two-step SSM procedure against the emulator. The emulator (a
-// seed-like machine with known errors and a 0.1 µm bar) is served on a pseudo-terminal by a thread of
-// this process, on simulated time as fast as the host reads; the procedure talks to it through the real
-// path (serial transport on the pty → protocol → driver), stores the session, and prints the measured
-// total position and orientation errors next to the emulator's true values (docs/procedure.md).
+// `ballbar demo`: the whole guided two-step SSM procedure against the emulator, and its comparison with
+// the truth. The use case is workflow::run_ssm_demo (a seed-like machine with known errors and a 0.1 µm
+// bar on a pseudo-terminal, the real serial path, the session stored, every stored point checked against
+// the truth); this file parses the options and prints the comparison (docs/procedure.md).
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,11 +18,8 @@
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/acquisition/session.hpp"
-#include "ballbar/device/emulator_host.hpp"
-#include "ballbar/device/uri.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
-#include "ballbar/workflow/pty_emulator.hpp"
-#include "ballbar/workflow/session_io.hpp"
+#include "ballbar/workflow/ssm_demo.hpp"
 #include "circle_measure.hpp"  // demo --test circular
 #include "command.hpp"
 #include "figures.hpp"
@@ -59,113 +55,6 @@ struct DemoOptions {
     std::string plane = "XY";
     double arc_deg = 0;
 };
-
-/// Answers every question like the plan and drives the emulator's machine as its operator would: runs
-/// each program it is told to start (late, at a feed override, when the faults say so), presses cycle
-/// start at every program stop and moves the socket when the stop says so.
-class DemoOperator : public acq::ScriptedOperator {
-  public:
-    /// `show_progress`: the running count on a terminal; `talk`: the procedure's messages on stderr (what
-    /// it waits for, and how long: a demo on a silent link must not be silent itself).
-    DemoOperator(const acq::Plan& plan, device::SimulatedMachine& machine, bool show_progress, bool talk,
-                 const device::FaultConfig& faults)
-        : acq::ScriptedOperator(plan.spec.answers),
-          machine_(machine),
-          show_(show_progress),
-          talk_(talk),
-          start_delay_s_(faults.start_delay_s),
-          feed_override_(faults.feed_override),
-          answer_delay_s_(faults.answer_delay_s) {}
-    void run_program(const ba::NcProgram& program, std::span<const std::size_t>, bool) override {
-        machine_.stop(0);  // stops wherever it is now
-        machine_.set_feed_override(feed_override_);
-        if (start_delay_s_ > 0) machine_.dwell(start_delay_s_);
-        machine_.run_program(program);
-        ++programs;
-    }
-    void program_stop(const acq::ProgramStop& stop) override {
-        if (stop.socket_mm) machine_.set_socket_mm(*stop.socket_mm);
-        if (answer_delay_s_ > 0) machine_.dwell(answer_delay_s_);  // stands at the stop, then cycle start
-        machine_.cycle_start(0);                                   // the rest runs once the machine stands at the stop
-    }
-    void progress(const acq::Progress& p) override {
-        if (!show_ || p.done == last_done_) return;
-        last_done_ = p.done;
-        std::fprintf(stderr, "\r  captured %zu/%zu points", p.done, p.total);
-        std::fflush(stderr);
-    }
-    void message(std::string_view text) override {
-        if (talk_) std::fprintf(stderr, "%s  %.*s\n", show_ ? "\r" : "", static_cast<int>(text.size()), text.data());
-    }
-    ~DemoOperator() override {
-        if (show_) std::fputc('\n', stderr);
-    }
-    int programs = 0;
-
-  private:
-    device::SimulatedMachine& machine_;
-    bool show_, talk_;
-    double start_delay_s_, feed_override_, answer_delay_s_;
-    std::size_t last_done_ = static_cast<std::size_t>(-1);
-};
-
-/// What the emulator's truth says of a stored session: each stored point's window of samples is checked
-/// against where the emulated machine truly stood at each sample's time (pose and socket), and the
-/// stored stream for samples stored twice (the same device time).
-struct TruthCheck {
-    std::size_t points = 0;
-    std::size_t wrong_pose = 0;    ///< points with a window sample away from the point's planned pose
-    std::size_t stored_twice = 0;  ///< stored samples whose device time another stored sample has
-    std::size_t samples_stored = 0;
-    std::string first_wrong;  ///< the first wrong point, for the message
-};
-
-TruthCheck check_against_truth(storage::Store& store, std::int64_t id, const device::Emulator& emu) {
-    TruthCheck c;
-    const device::SimulatedMachine& m = emu.machine();
-    const auto samples = store.samples(id);
-    c.samples_stored = samples.size();
-    std::vector<std::uint64_t> times;
-    times.reserve(samples.size());
-    for (const auto& s : samples) times.push_back(s.device_time_us);
-    std::sort(times.begin(), times.end());
-    c.stored_twice = static_cast<std::size_t>(times.end() - std::unique(times.begin(), times.end()));
-    for (const auto& p : store.points(id)) {
-        ++c.points;
-        if (!p.first_seq || !p.last_seq || *p.last_seq < *p.first_seq || *p.last_seq >= samples.size()) {
-            ++c.wrong_pose;
-            continue;
-        }
-        const ba::Pose& want = p.reading.pose;
-        bool ok = true;
-        std::string why;
-        for (std::uint64_t q = *p.first_seq; q <= *p.last_seq && ok; ++q) {
-            const double t_s = static_cast<double>(samples[static_cast<std::size_t>(q)].device_time_us) * 1e-6;
-            const auto t = m.truth_at(t_s);
-            ok = t && (t->pose.linear_mm() - want.linear_mm()).norm() < 1e-4 &&
-                 std::abs(t->pose.A_rad - want.A_rad) < 1e-6 && std::abs(t->pose.B_rad - want.B_rad) < 1e-6 &&
-                 std::abs(t->pose.C_rad - want.C_rad) < 1e-6 && (t->socket_mm - p.reading.socket_mm).norm() < 1e-6;
-            if (!ok) {
-                std::ostringstream os;
-                os << "sample " << q << " at " << t_s << " s: ";
-                if (t)
-                    os << "the machine at X" << t->pose.X_mm << " Y" << t->pose.Y_mm << " Z" << t->pose.Z_mm
-                       << ", socket " << t->socket_mm.transpose() << "; planned X" << want.X_mm << " Y" << want.Y_mm
-                       << " Z" << want.Z_mm << ", socket " << p.reading.socket_mm.transpose();
-                else
-                    os << "a time the machine has not reached";
-                why = os.str();
-            }
-        }
-        if (!ok) {
-            ++c.wrong_pose;
-            if (c.first_wrong.empty())
-                c.first_wrong = "location " + std::to_string(p.reading.location) + " point " +
-                                std::to_string(p.reading.point) + ", " + why;
-        }
-    }
-    return c;
-}
 
 /// --faults SPEC: the emulator's "faults" object, inline JSON or a file holding it.
 device::FaultConfig parse_faults(const std::string& spec) {
@@ -237,99 +126,75 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         return run_gauge_demo({o.instrument, o.machine, o.seed, o.gauge_rate_hz, o.json}, resolve_db_path(globals));
     const auto type = ba::parse_machine_type(o.machine);
     if (!type) throw Error(ErrorCategory::bad_input, "--machine must be RRTTT, TTTRR or RTTTR");
-    const acq::MachineFile machine = acq::seed_machine(*type);
-    acq::PlanSpec spec = acq::default_plan(machine);
+    workflow::SsmDemoOptions demo;
+    demo.machine = *type;
+    demo.seed = o.seed;
+    demo.notes = "ballbar demo --machine " + o.machine + " --seed " + std::to_string(o.seed);
     if (!o.plan.empty()) {
         try {
-            spec = acq::parse_plan_file(read_file(o.plan, "plan file"), machine.geometry.type);
+            demo.plan = acq::parse_plan_file(read_file(o.plan, "plan file"), *type);
         } catch (const acq::PlanError& e) {
             throw Error(ErrorCategory::bad_input, o.plan + ": " + e.what());
         }
-        spec.answers.on_point_failure = acq::PointFailureAction::Retry;  // the demo's operator never gives up
+        demo.plan->answers.on_point_failure = acq::PointFailureAction::Retry;  // the demo's operator never gives up
     }
-    spec.answers.operator_name = "demo";
-    const acq::Plan plan = acq::make_plan(machine, spec);
-
-    device::EmulatorConfig cfg;
-    cfg.seed = o.seed;
-    cfg.instrument.calibrated_length_mm = spec.bar_length_mm;
-    cfg.instrument.noise_um = 0.1;
-    // A serial of this process's own: demos running side by side each reconnect to their own emulator
-    // (a pty name can be reused by another one's after a simulated disconnect).
-    cfg.instrument.serial = "EMU" + std::to_string(10000 + ::getpid() % 90000);
-    cfg.machine.geometry = machine.geometry;
-    cfg.machine.errors = acq::demo_errors(*type);
-    cfg.machine.socket_mm = plan.points.front().socket_mm;
-    cfg.machine.start = plan.points.front().pose;
-    if (!o.faults.empty()) cfg.faults = parse_faults(o.faults);
-    workflow::PtyEmulator emulator(cfg);
-    emulator.emulator().machine().keep_history();  // for the truth check of every stored point
+    if (!o.faults.empty()) demo.faults = parse_faults(o.faults);
 
     // A killed demo loses at most its last batch; the demo does not need an fsync per commit.
     storage::StoreOptions so;
     so.sync_full = false;
     storage::Store store(resolve_db_path(globals), so);
-    storage::NewSession ns;
-    ns.machine = machine.geometry;
-    ns.source = storage::SessionSource::emulator;
-    ns.operator_name = "demo";
-    ns.procedure = "ssm-two-step";
-    ns.notes = "ballbar demo --machine " + o.machine + " --seed " + std::to_string(o.seed);
-    storage::Instrument inst;
-    inst.model = cfg.instrument.model;
-    inst.serial = cfg.instrument.serial;
-    inst.firmware = cfg.instrument.firmware;
-    inst.calibrated_length_mm = cfg.instrument.calibrated_length_mm;
-    ns.instrument = inst;
-    const std::int64_t id = store.create_session(ns);
-    store.start_session(id);
-    workflow::store_plan(store, id, plan);
 
-    const bool show = !o.json && ::isatty(STDERR_FILENO);
+    const bool show = !o.json && ::isatty(STDERR_FILENO);  // the running count, on a terminal
+    std::size_t last_done = static_cast<std::size_t>(-1);
+    workflow::SsmDemoEvents events;
+    events.started = [&](std::int64_t, const acq::Plan& plan, const std::string& pty) {
+        if (!o.json)
+            std::cout << "ballbar demo: " << o.machine << " (" << plan.machine.geometry.name << "), "
+                      << plan.test_count() << " two-step tests, " << plan.points.size() << " points; emulator on "
+                      << pty << "\n";
+    };
+    events.progress = [&](const acq::Progress& p) {
+        if (!show || p.done == last_done) return;
+        last_done = p.done;
+        std::fprintf(stderr, "\r  captured %zu/%zu points", p.done, p.total);
+        std::fflush(stderr);
+    };
+    // What the procedure waits for, and how long: a demo on a silent link must not be silent itself.
     if (!o.json)
-        std::cout << "ballbar demo: " << o.machine << " (" << machine.geometry.name << "), " << plan.test_count()
-                  << " two-step tests, " << plan.points.size() << " points; emulator on " << emulator.path() << "\n";
-    workflow::DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
-    workflow::StoreSink sink(store, id, plan);
-    DemoOperator op(plan, emulator.emulator().machine(), show, !o.json, cfg.faults);
-    acq::Session session(plan, source, sink, op);
-    const acq::SessionSummary sum = session.run();
-    sink.finish(sum);
-    if (sum.final_state != acq::State::Done) {
-        // The points it did store are checked against the truth all the same: an unfinished session
-        // must not hide a wrong point either. Its end is told as stored (interrupted, aborted, failed).
-        emulator.halt();
-        const TruthCheck tc = check_against_truth(store, id, emulator.emulator());
-        std::string truth = "; its " + std::to_string(tc.points) + " stored points checked against the truth: ";
-        truth += tc.wrong_pose == 0
-                     ? "all at their pose"
-                     : std::to_string(tc.wrong_pose) + " away from their pose (first: " + tc.first_wrong + ")";
-        throw Error(ErrorCategory::failed, "demo session " + std::to_string(id) + " ended " +
-                                               std::string(storage::to_string(store.session(id).state)) + ": " +
-                                               sum.reason + truth);
+        events.message = [&](std::string_view text) {
+            std::fprintf(stderr, "%s  %.*s\n", show ? "\r" : "", static_cast<int>(text.size()), text.data());
+        };
+    struct EndLine {  // the running count's line ends however the demo does
+        bool show;
+        ~EndLine() {
+            if (show) std::fputc('\n', stderr);
+        }
+    };
+    workflow::SsmDemoResult run;
+    {
+        const EndLine end{show};
+        run = workflow::run_ssm_demo(store, demo, events);
     }
+    const std::int64_t id = run.session_id;
+    const acq::Plan& plan = run.plan;
+    const acq::SessionSummary& sum = run.summary;
+    const workflow::TruthCheck& tc = run.check;
 
     // Compare with the truth.
-    const auto truth = acq::true_values(plan, cfg.machine.errors);
     json out;
     out["session"] = id;
     out["machine"] = o.machine;
     out["locations"] = json::array();
     out["orientation"] = json::array();
-    std::vector<acq::LocationResult> locs;
-    for (const auto& r : store.results(id))
-        if (r.kind == acq::kSsmResultKind) locs.push_back(acq::location_from_json(r.payload_json));
-    for (const auto& l : locs) {
-        const auto& t = truth[static_cast<std::size_t>(l.test)];
-        const ba::Vec3 tr = l.step == 1 ? t.e1_mm : t.e2_mm;
+    for (const auto& [l, tr] : run.locations)
         out["locations"].push_back({{"test", l.test + 1},
                                     {"step", l.step},
                                     {"measured_mm", {l.ssm.exact_mm.x(), l.ssm.exact_mm.y(), l.ssm.exact_mm.z()}},
                                     {"std_mm", {l.ssm.std_mm.x(), l.ssm.std_mm.y(), l.ssm.std_mm.z()}},
                                     {"true_mm", {tr.x(), tr.y(), tr.z()}}});
-    }
     for (const auto& r : sum.tests) {
-        const auto& t = truth[static_cast<std::size_t>(r.test)];
+        const auto& t = run.truth[static_cast<std::size_t>(r.test)];
         out["orientation"].push_back(
             {{"test", r.test + 1},
              {"kind", std::string(acq::to_string(r.kind))},
@@ -343,20 +208,13 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     out["programs"] = sum.programs;
     out["void_dwells"] = sum.void_dwells;
     out["pauses"] = sum.pauses;
-    emulator.halt();
-    const TruthCheck tc = check_against_truth(store, id, emulator.emulator());
-    const auto& ec = emulator.emulator().counters();
     out["truth_check"] = {{"points", tc.points},
                           {"wrong_pose", tc.wrong_pose},
                           {"stored_twice", tc.stored_twice},
                           {"samples_stored", tc.samples_stored},
-                          {"dropped_frames", ec.dropped_frames},
-                          {"replayed_frames", ec.replayed_frames},
-                          {"corrupted_bytes", ec.corrupted_bytes}};
-    if (tc.wrong_pose > 0 || tc.stored_twice > 0)
-        throw Error(ErrorCategory::failed, "demo session " + std::to_string(id) + ": " + std::to_string(tc.wrong_pose) +
-                                               " points stored away from their pose (first: " + tc.first_wrong + "), " +
-                                               std::to_string(tc.stored_twice) + " samples stored twice");
+                          {"dropped_frames", run.dropped_frames},
+                          {"replayed_frames", run.replayed_frames},
+                          {"corrupted_bytes", run.corrupted_bytes}};
 
     int code = kExitOk;
     std::string compensation_text;  // printed after the session's tables
