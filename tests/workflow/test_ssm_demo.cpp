@@ -87,8 +87,8 @@ void expect_windows_name_their_samples(storage::Store& store, std::int64_t id) {
         ASSERT_TRUE(p.first_seq && p.last_seq);
         double sum = 0;
         int n = 0;
-        for (auto it = displacement_mm.lower_bound(*p.first_seq); it != displacement_mm.end() && it->first <= *p.last_seq;
-             ++it) {
+        for (auto it = displacement_mm.lower_bound(*p.first_seq);
+             it != displacement_mm.end() && it->first <= *p.last_seq; ++it) {
             sum += it->second;
             ++n;
         }
