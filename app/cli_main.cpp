@@ -101,12 +101,6 @@ CLI::Validator in_range(double lo, double hi, std::string unit, bool lo_open) {
         range);
 }
 
-bool looks_like_session_key(std::string_view arg) {
-    return !arg.empty() && std::all_of(arg.begin(), arg.end(), [](char c) {
-        return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F') || c == '-';
-    });
-}
-
 namespace {
 
 std::size_t edit_distance(std::string_view a, std::string_view b) {

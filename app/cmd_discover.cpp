@@ -25,6 +25,7 @@
 #include "ballbar/storage/sqlite.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/version.hpp"
+#include "ballbar/workflow/identify.hpp"
 #include "command.hpp"
 
 namespace ballbar::app {
@@ -41,46 +42,7 @@ struct DiscoverOptions {
     bool json = false;
 };
 
-struct Inputs {
-    std::vector<ba::ReadingSet> sets;
-    std::vector<std::int64_t> sessions;
-    std::vector<std::string> names;
-};
-
-/// Readings files by path; anything else is a session (id or uuid prefix) of the database.
-Inputs load_inputs(const DiscoverOptions& o, const Globals& globals, std::unique_ptr<storage::Store>& store) {
-    Inputs in;
-    for (const std::string& arg : o.inputs) {
-        std::error_code ec;
-        // Anything at that path is a file to read (fileio says when it is a directory or a FIFO).
-        if (std::filesystem::exists(std::filesystem::symlink_status(arg, ec))) {
-            try {
-                in.sets.push_back(storage::read_readings_file(arg).set);
-            } catch (const storage::ReadingsFileError& e) {
-                throw Error(ErrorCategory::bad_input, arg + ": " + e.what());
-            }
-            in.names.push_back(arg);
-            continue;
-        }
-        if (!std::filesystem::exists(arg, ec) && !looks_like_session_key(arg))
-            throw Error(ErrorCategory::bad_input, "no such file: " + arg);
-        // Sessions are read from an existing database only (a mistyped --db is not a new file).
-        if (!store) store = std::make_unique<storage::Store>(existing_db_path(globals));
-        std::int64_t id = 0;
-        try {
-            id = store->find_session(arg);
-        } catch (const storage::StorageError& e) {
-            throw Error(ErrorCategory::bad_input,
-                        "'" + arg + "' is neither a readings file nor a session: " + e.what());
-        }
-        in.sets.push_back(storage::load_readings(*store, id));
-        if (in.sets.back().readings.empty())
-            throw Error(ErrorCategory::bad_input, "session " + std::to_string(id) + " has no readings");
-        in.sessions.push_back(id);
-        in.names.push_back("session " + std::to_string(id));
-    }
-    return in;
-}
+using Inputs = workflow::ReadingInputs;
 
 std::vector<std::string> param_names(const std::vector<ba::Param>& params) {
     std::vector<std::string> out;
@@ -358,7 +320,11 @@ int run_discover(const DiscoverOptions& o, const Globals& globals) {
     mallopt(M_MMAP_THRESHOLD, 512 << 20);
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
     std::unique_ptr<storage::Store> store;
-    Inputs in = load_inputs(o, globals, store);
+    // Sessions are read from an existing database only (a mistyped --db is not a new file).
+    Inputs in = workflow::read_inputs(o.inputs, [&]() -> storage::Store& {
+        if (!store) store = std::make_unique<storage::Store>(existing_db_path(globals));
+        return *store;
+    });
     ba::ReadingSet set;
     try {
         set = ba::merge_readings(std::move(in.sets));  // moved: the readings are held once

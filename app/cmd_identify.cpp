@@ -12,10 +12,8 @@
 #include <vector>
 
 #include "ballbar/analysis/identify.hpp"
-#include "ballbar/storage/model_codec.hpp"
-#include "ballbar/storage/readings.hpp"
-#include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/store.hpp"
+#include "ballbar/workflow/identify.hpp"
 #include "command.hpp"
 #include "figures.hpp"
 
@@ -58,135 +56,39 @@ std::vector<ba::Param> parse_params(const std::vector<std::string>& names, ba::M
     return out;
 }
 
-/// The model the fit made, as it is stored (ballbar-model/1).
-bs::ErrorModel fitted_model(const ba::MachineGeometry& machine, const ba::FitSummary& fit) {
-    bs::ErrorModel m;
-    m.machine = machine;
-    for (const auto& e : fit.estimates) {
-        if (!e.param) continue;  // a socket's offset: the sockets below
-        if (e.observable)
-            m.params.push_back({*e.param, e.estimate, e.std});
-        else
-            m.unobservable.push_back(*e.param);
-    }
-    for (const auto& s : fit.sockets) m.sockets.push_back({s.nominal_mm, s.offset_mm});
-    m.residual_rms_um = fit.residual_rms_mm * 1e3;
-    m.readings = fit.readings;
-    m.converged = fit.converged;
-    return m;
-}
-
-json summary_json(const ba::FitSummary& fit) {
-    json j;
-    j["converged"] = fit.converged;
-    j["iterations"] = fit.iterations;
-    j["message"] = fit.message;
-    j["readings"] = fit.readings;
-    j["degrees_of_freedom"] = fit.degrees_of_freedom;
-    j["residual_rms_um"] = fit.residual_rms_mm * 1e3;
-    j["residual_sigma_um"] = fit.residual_sigma_mm * 1e3;
-    j["noise_floor_um"] = fit.noise_floor_mm * 1e3;
-    j["uncertainty_from_noise_floor"] = fit.uncertainty_from_floor;
-    j["initial_rms_um"] = fit.initial_rms_mm * 1e3;
-    j["estimates"] = json::array();
-    for (const auto& e : fit.estimates) {
-        json x{{"name", e.name},
-               {"estimate", e.estimate},
-               {"std", e.std},
-               {"sensitivity", e.sensitivity},
-               {"independence", e.independence},
-               {"observable", e.observable}};
-        if (e.param)
-            x["unit"] = std::string(ba::to_string(ba::param_info(*e.param).unit));
-        else
-            x["unit"] = "mm";
-        j["estimates"].push_back(x);
-    }
-    j["correlation"] = json::array();
-    for (Eigen::Index r = 0; r < fit.correlation.rows(); ++r) {
-        json row = json::array();
-        for (Eigen::Index c = 0; c < fit.correlation.cols(); ++c) row.push_back(fit.correlation(r, c));
-        j["correlation"].push_back(row);
-    }
-    j["correlation_names"] = json::array();
-    for (std::size_t i : fit.fitted) j["correlation_names"].push_back(fit.estimates[i].name);
-    return j;
-}
-
 int run_identify(const IdentifyArgs& args, const Globals& globals) {
-    std::vector<ba::ReadingSet> sets;
-    std::vector<std::int64_t> sessions;
     std::unique_ptr<bs::Store> store;
     // Sessions are read from an existing database only (a mistyped --db is an error, not a new
     // file); storing the model from readings files alone may create it.
-    auto open_store = [&](bool create) -> bs::Store& {
-        if (!store) store = std::make_unique<bs::Store>(create ? resolve_db_path(globals) : existing_db_path(globals));
-        return *store;
+    auto opener = [&](bool create) {
+        return [&store, &globals, create]() -> bs::Store& {
+            if (!store)
+                store = std::make_unique<bs::Store>(create ? resolve_db_path(globals) : existing_db_path(globals));
+            return *store;
+        };
     };
-    for (const std::string& in : args.inputs) {
-        std::error_code ec;
-        if (!std::filesystem::exists(in, ec) && !looks_like_session_key(in))
-            throw Error(ErrorCategory::bad_input, "no such file: " + in);
-        // Anything at that path is a file to read (fileio says when it is a directory or a FIFO).
-        if (std::filesystem::exists(std::filesystem::symlink_status(in, ec))) {
-            try {
-                sets.push_back(bs::read_readings_file(in).set);
-            } catch (const bs::ReadingsFileError& e) {
-                throw Error(ErrorCategory::bad_input, in + ": " + e.what());
-            }
-        } else {
-            bs::Store& st = open_store(false);
-            std::int64_t id = 0;
-            try {
-                id = st.find_session(in);
-            } catch (const bs::StorageError& e) {
-                throw Error(ErrorCategory::bad_input,
-                            "'" + in + "' is neither a readings file nor a session: " + e.what());
-            }
-            sets.push_back(bs::load_readings(st, id));
-            sessions.push_back(id);
-        }
-    }
-    ba::ReadingSet readings;
-    try {
-        readings = ba::merge_readings(std::move(sets));
-    } catch (const ba::AnalysisError& e) {
-        throw Error(ErrorCategory::bad_input, e.what());
-    }
-    ba::FitOptions fo;
-    fo.free_params = parse_params(args.params, readings.machine.type);
-    ba::FitSummary fit;
-    try {
-        fit = ba::fit_error_model(readings, fo);
-    } catch (const ba::AnalysisError& e) {
-        // Valid readings that cannot support the fit (too few for the unknowns): the operation failed,
-        // as in `discover`.
-        throw Error(ErrorCategory::failed, std::string("identification failed: ") + e.what());
-    }
+    workflow::ReadingInputs inputs = workflow::read_inputs(args.inputs, opener(false));
+    workflow::IdentifyOptions io;
+    io.free_params = parse_params(args.params, inputs.sets.front().machine.type);
+    io.model_name = args.name;
+    io.store_model = !args.no_store;
+    const workflow::IdentifyResult r = workflow::identify(std::move(inputs), io, opener(true));
 
-    json out = summary_json(fit);
-    const std::string model = bs::model_to_json(fitted_model(readings.machine, fit));
-    out["model"] = json::parse(model);
-    if (!args.no_store && fit.converged) {
-        bs::Store& st = open_store(true);
-        const std::string name = !args.name.empty()               ? args.name
-                                 : !readings.machine.name.empty() ? readings.machine.name
-                                                                  : std::string(ba::to_string(readings.machine.type));
-        const bs::ModelRecord rec = st.save_model(name, model, sessions, std::nullopt, "ballbar identify");
-        for (std::int64_t s : sessions) st.add_result(s, "identification", out.dump(), rec.id, "ballbar identify/1");
-        out["model_id"] = rec.id;
-        out["model_name"] = rec.name;
-        out["model_version"] = rec.version;
+    json out = json::parse(r.payload_json);
+    if (r.stored) {
+        out["model_id"] = r.stored->id;
+        out["model_name"] = r.stored->name;
+        out["model_version"] = r.stored->version;
     }
     if (args.json) {
         std::cout << out.dump(2) << '\n';
     } else {
-        std::cout << fit_report(fit);  // units and uncertainties (figures.hpp)
-        if (out.contains("model_id"))
-            std::cout << "stored as model " << out["model_id"] << " (" << out["model_name"].get<std::string>()
-                      << " version " << out["model_version"] << ")\n";
+        std::cout << fit_report(r.fit);  // units and uncertainties (figures.hpp)
+        if (r.stored)
+            std::cout << "stored as model " << r.stored->id << " (" << r.stored->name << " version "
+                      << r.stored->version << ")\n";
     }
-    return fit.converged ? kExitOk : kExitFailure;
+    return r.fit.converged ? kExitOk : kExitFailure;
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "ballbar/workflow/error.hpp"
+#include "ballbar/workflow/session_key.hpp"
 
 namespace ballbar::app {
 
@@ -94,9 +95,7 @@ std::string existing_db_path(const Globals& globals);
 /// incomplete. Nothing is said for an empty `damage`.
 void note_database_damage(const std::string& damage);
 
-/// True when `arg` can only be a session key (an id or a uuid prefix: digits and hex letters), so a
-/// command taking "FILE or SESSION" can say "no such file" for anything else that is not a file.
-bool looks_like_session_key(std::string_view arg);
+using workflow::looks_like_session_key;  ///< an id or a uuid prefix (workflow/session_key.hpp)
 
 /// The whole of a JSON input file, at most fileio::kMaxJsonBytes (app/files.cpp). Throws
 /// Error (bad input) naming `what` ("machine file") when it cannot be read or is refused.

@@ -81,14 +81,39 @@ std::vector<SocketPosition> socket_positions(const ReadingSet& readings, std::ve
     return out;
 }
 
+namespace {
+
+std::string format_vec(const Vec3& v) {
+    std::ostringstream os;
+    os.precision(10);
+    os << '[' << v.x() << ", " << v.y() << ", " << v.z() << "] mm";
+    return os.str();
+}
+
+/// Readings are merged for one fit only when they are of one machine: its type, and the geometry the
+/// model computes with (a set of another geometry would be fitted with the first set's, silently wrong).
+void check_same_machine(const MachineGeometry& a, const MachineGeometry& b) {
+    if (b.type != a.type)
+        throw AnalysisError("cannot merge readings of a " + std::string(to_string(b.type)) +
+                            " machine with readings of a " + std::string(to_string(a.type)) + " machine");
+    constexpr double kSame_mm = 1e-6;  // a machine file written and read again agrees to far better
+    const std::pair<const char*, Vec3 MachineGeometry::*> keys[] = {{"tool_ball_mm", &MachineGeometry::tool_ball_mm},
+                                                                    {"a_pivot_mm", &MachineGeometry::a_pivot_mm},
+                                                                    {"c_offset_mm", &MachineGeometry::c_offset_mm}};
+    for (const auto& [key, member] : keys)
+        if (((a.*member) - (b.*member)).cwiseAbs().maxCoeff() > kSame_mm)
+            throw AnalysisError(std::string("cannot merge readings of two machines: their ") + key + " differ (" +
+                                format_vec(a.*member) + " and " + format_vec(b.*member) + ")");
+}
+
+}  // namespace
+
 ReadingSet merge_readings(std::span<const ReadingSet> sets) {
     if (sets.empty()) throw AnalysisError("no readings to merge");
     ReadingSet out;
     out.machine = sets.front().machine;
     for (const auto& s : sets) {
-        if (s.machine.type != out.machine.type)
-            throw AnalysisError("cannot merge readings of a " + std::string(to_string(s.machine.type)) +
-                                " machine with readings of a " + std::string(to_string(out.machine.type)) + " machine");
+        check_same_machine(out.machine, s.machine);
         out.readings.insert(out.readings.end(), s.readings.begin(), s.readings.end());
     }
     return out;
@@ -96,12 +121,7 @@ ReadingSet merge_readings(std::span<const ReadingSet> sets) {
 
 ReadingSet merge_readings(std::vector<ReadingSet>&& sets) {
     if (sets.empty()) throw AnalysisError("no readings to merge");
-    for (const auto& s : sets) {
-        if (s.machine.type != sets.front().machine.type)
-            throw AnalysisError("cannot merge readings of a " + std::string(to_string(s.machine.type)) +
-                                " machine with readings of a " + std::string(to_string(sets.front().machine.type)) +
-                                " machine");
-    }
+    for (const auto& s : sets) check_same_machine(sets.front().machine, s.machine);
     ReadingSet out = std::move(sets.front());
     std::size_t total = 0;
     for (const auto& s : sets) total += s.readings.size();

@@ -307,6 +307,27 @@ TEST(Identify, MergedSessionsFitTogether) {
     }
 }
 
+/// Readings of two machines of one type but another geometry were merged and fitted with the first's
+/// geometry: a silently wrong model. Now refused, naming what differs.
+TEST(Identify, ReadingsOfAnotherGeometryAreNotMerged) {
+    const MachineGeometry g = test_machine(MachineType::TTTRR);
+    ReadingSet a, b;
+    a.machine = b.machine = g;
+    b.machine.c_offset_mm.z() += 10;
+    a.readings.resize(3);
+    b.readings.resize(3);
+    try {
+        (void)merge_readings(std::vector<ReadingSet>{a, b});
+        FAIL() << "merged";
+    } catch (const AnalysisError& e) {
+        EXPECT_NE(std::string(e.what()).find("c_offset_mm differ"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW((void)merge_readings(std::span<const ReadingSet>(std::vector<ReadingSet>{a, b})), AnalysisError);
+    b.machine = g;
+    b.machine.name = "the same machine under another name";
+    EXPECT_EQ(merge_readings(std::vector<ReadingSet>{a, b}).readings.size(), 6u);
+}
+
 TEST(Plan, MakesTheRotaryParametersObservableAndNamesTheUnreachable) {
     const MachineGeometry g = test_machine(MachineType::TTTRR);
     PlanOptions po;

@@ -105,8 +105,9 @@ struct FitSummary {
 /// Distinct socket positions of `readings` in first-seen order, and each reading's socket index.
 std::vector<SocketPosition> socket_positions(const ReadingSet& readings, std::vector<int>* reading_socket = nullptr);
 
-/// Merges several reading sets of one machine (same type; the first set's geometry is kept).
-/// Throws AnalysisError when the machine types differ.
+/// Merges several reading sets of one machine: the same type and geometry (to 1e-6 mm; the first set's
+/// name is kept). Throws AnalysisError naming what differs: a set of another geometry would otherwise be
+/// fitted with the first set's, silently wrong.
 ReadingSet merge_readings(std::span<const ReadingSet> sets);
 /// The same, taking the sets: their readings are moved, never held twice (a readings file of 250 MiB
 /// is about 330 MB in memory).
