@@ -17,8 +17,7 @@
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/gauge.hpp"
 #include "ballbar/device/uri.hpp"
-#include "ballbar/workflow/gauge_source.hpp"
-#include "ballbar/workflow/session_io.hpp"
+#include "ballbar/workflow/measure.hpp"
 #include "command.hpp"
 #include "files.hpp"
 #include "interrupt.hpp"
@@ -79,17 +78,6 @@ void print_results(std::ostream& out, const acq::Plan& plan, const acq::SessionS
         if (angles.gamma) ang("Δγ", e.d_gamma_rad, t.std_rad ? std::optional(t.std_rad->d_gamma_rad) : std::nullopt);
         out << os.str() << "\n";
     }
-}
-
-/// The identity the instrument reported, stored with the session (sessions show, the report).
-void record_instrument(storage::Store& store, std::int64_t id, const device::InstrumentInfo& info) {
-    storage::Instrument in;
-    in.model = info.model;
-    in.serial = info.serial;
-    in.firmware = info.firmware;
-    in.calibrated_length_mm = info.calibrated_length_mm;
-    in.calibration_date = info.calibration_date;
-    store.set_instrument(id, in);
 }
 
 /// What --program must never replace: the machine and plan files, the database.
@@ -183,49 +171,29 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
             throw as_error(e);
         }
     }
-    std::int64_t id = 0;
-    acq::Plan plan;
-    std::vector<acq::CapturedPoint> done;
     std::unique_ptr<storage::Store> opened;
+    workflow::PreparedSession prepared;
     if (!o.resume.empty()) {
         // A session is continued in an existing database only (a mistyped --db is not a new file).
         opened = std::make_unique<storage::Store>(existing_db_path(globals));
+        // Why it stopped is shown first, also when it cannot be continued.
         try {
-            id = opened->find_session(o.resume);
+            const storage::SessionInfo before = opened->session(opened->find_session(o.resume));
+            std::cout << "Session " << before.id << " is " << storage::to_string(before.state)
+                      << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
         } catch (const storage::StorageError& e) {
             throw as_error(e);  // no such session: exit 2, as `sessions show` says it
         }
-        const storage::SessionInfo before = opened->session(id);  // why it stopped, shown first
-        std::cout << "Session " << id << " is " << storage::to_string(before.state)
-                  << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
-        try {
-            plan = workflow::load_plan(*opened, id);
-        } catch (const acq::PlanError& e) {
-            throw Error(ErrorCategory::bad_input, e.what());
-        }
-        done = workflow::load_points(*opened, id, plan);
-        try {
-            opened->resume_session(id);
-        } catch (const storage::StorageError& e) {
-            // A completed or aborted session, or one another process is measuring: the request
-            // contradicts the session's state, a bad command line (exit 2) that changes nothing.
-            if (e.kind() != storage::StorageError::Kind::invalid) throw;
-            throw Error(ErrorCategory::bad_input, e.what());
-        }
+        prepared = workflow::resume_ssm_session(*opened, o.resume);
     } else {
-        plan = new_plan(o);
+        const acq::Plan plan = new_plan(o);
         opened = std::make_unique<storage::Store>(resolve_db_path(globals));
-        storage::NewSession ns;
-        ns.machine = plan.machine.geometry;
-        ns.source =
-            o.device.rfind("emulator:", 0) == 0 ? storage::SessionSource::emulator : storage::SessionSource::device;
-        ns.operator_name = plan.spec.answers.operator_name;
-        ns.procedure = "ssm-two-step";
-        id = opened->create_session(ns);
-        opened->start_session(id);
-        workflow::store_plan(*opened, id, plan);
+        prepared = workflow::new_ssm_session(*opened, plan, o.device);
     }
     storage::Store& store = *opened;
+    const std::int64_t id = prepared.id;
+    const acq::Plan& plan = prepared.plan;
+    const std::vector<acq::CapturedPoint>& done = prepared.done;
     std::cout << "Session " << id << (done.empty() ? "" : " (resumed after " + std::to_string(done.size()) + " points)")
               << ": " << ba::to_string(plan.machine.geometry.type) << ", " << plan.test_count() << " tests, "
               << plan.points.size() << " points.\n";
@@ -239,31 +207,12 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         op = std::make_unique<ScriptedTerminalOperator>(std::cout, plan, program);
     else
         op = std::make_unique<TerminalOperator>(std::cin, std::cout, globals.color, plan, program);
-    const std::string uri = o.device;
-    workflow::DeviceSource source([uri] {
-        try {
-            return device::open_transport(uri);
-        } catch (const std::invalid_argument& e) {
-            throw acq::SourceError(e.what());
-        }
-    });
-    source.on_identified = [&store, id, &plan, &o](const device::InstrumentInfo& info) {
-        record_instrument(store, id, info);
-        const std::string mismatch = acq::bar_length_mismatch(plan.spec.bar_length_mm, info.calibrated_length_mm,
-                                                              plan.spec.capture.tolerance_mm, o.plan_file);
-        if (!mismatch.empty()) throw acq::InstrumentUnfit(mismatch);
-    };
-    workflow::StoreSink sink(store, id, plan);
     const InterruptGuard interrupt;  // Ctrl-C: stop, store, stay resumable, exit 3
-    acq::SessionOptions options;
-    options.stop = InterruptGuard::flag();
-    const auto gauge = workflow::make_gauge_source(uri, plan.spec.bar_length_mm);  // a digital gauge (gauge_source.hpp)
-    acq::Session session(plan, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, *op, options);
-    session.restore(done);
-    const std::uint64_t first_seq = store.next_seq(id);  // this run's samples (a resume continues after)
-    const acq::SessionSummary sum = session.run();
-    sink.finish(sum);
-    if (gauge) workflow::store_gauge_instrument(store, id, *gauge, first_seq);  // identity, resolution, rate
+    workflow::SsmMeasureOptions mo;
+    mo.device_uri = o.device;
+    mo.plan_file = o.plan_file;
+    mo.stop = InterruptGuard::flag();
+    const acq::SessionSummary sum = workflow::measure_ssm(store, prepared, *op, mo);
     if (sum.interrupted) {
         std::string retry;
         if (!sum.missing.empty()) {

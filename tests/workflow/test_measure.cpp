@@ -1,0 +1,169 @@
+// SPDX-License-Identifier: MIT
+// The SSM measurement as a use case, in process: a new session on the emulator (`emulator:` with a
+// configuration whose machine runs the program the operator writes), a run stopped half-way by the front
+// end's stop flag and taken up again from its stored plan and points, and the refusals of a resume.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "ballbar/acquisition/machine_file.hpp"
+#include "ballbar/acquisition/result_codec.hpp"
+#include "ballbar/analysis/nc_program.hpp"
+#include "ballbar/device/pipe.hpp"
+#include "ballbar/workflow/error.hpp"
+#include "ballbar/workflow/measure.hpp"
+
+namespace ballbar::workflow {
+namespace {
+
+namespace acq = ballbar::acquisition;
+namespace fs = std::filesystem;
+const fs::path kData = fs::path(BALLBAR_TEST_DATA_DIR) / "machines";
+
+std::string slurp(const fs::path& p) {
+    std::ifstream f(p);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+struct Dir {
+    fs::path path;
+    Dir() {
+        char tmpl[] = "/tmp/ballbar-measure-wf-XXXXXX";
+        path = ::mkdtemp(tmpl);
+    }
+    ~Dir() { fs::remove_all(path); }
+    /// An `emulator:` URI whose machine runs the program written to `program` (at each cycle start).
+    std::string device(const fs::path& program) const { return "emulator:" + config(program).string(); }
+    fs::path config(const fs::path& program) const {
+        std::string cfg = slurp(kData / "tttrr-emulator.json");
+        cfg.replace(cfg.find("PROGRAM"), 7, program.string());
+        const fs::path p = path / ("emulator-" + program.stem().string() + ".json");
+        std::ofstream(p) << cfg;
+        return p;
+    }
+};
+
+/// The plan's answers, and the machine's operator: writes each program where the emulated machine loads
+/// it. Sets `stop` once `stop_after` points are captured (a front end's stop button).
+class FileOperator : public acq::ScriptedOperator {
+  public:
+    FileOperator(const acq::Plan& plan, fs::path program, std::atomic<bool>* stop = nullptr, std::size_t stop_after = 0)
+        : acq::ScriptedOperator(plan.spec.answers),
+          program_(std::move(program)),
+          stop_(stop),
+          stop_after_(stop_after) {}
+    void run_program(const analysis::NcProgram& program, std::span<const std::size_t> points, bool retry) override {
+        std::ofstream(program_) << analysis::write_nc_program(program, "test");
+        last_program_points = points.size();
+        retried = retried || retry;
+    }
+    void progress(const acq::Progress& p) override {
+        if (stop_ && stop_after_ > 0 && p.done >= stop_after_) stop_->store(true);
+    }
+    std::size_t last_program_points = 0;
+    bool retried = false;
+
+  private:
+    fs::path program_;
+    std::atomic<bool>* stop_;
+    std::size_t stop_after_;
+};
+
+/// The run's options: the emulator of `config` in process, on simulated time (a run takes what the CPU
+/// needs, not the machine's minutes); `device_uri` as a front end would give it.
+SsmMeasureOptions simulated(const Dir& d, const fs::path& program) {
+    SsmMeasureOptions o;
+    o.device_uri = d.device(program);
+    const fs::path cfg = d.config(program);
+    o.open_transport = [cfg] {
+        return std::make_unique<device::PipeTransport>(
+            std::make_unique<device::Emulator>(device::load_emulator_config(cfg.string())), device::Pacing::Simulated);
+    };
+    return o;
+}
+
+acq::Plan quick_plan() {
+    const acq::MachineFile m = acq::parse_machine_file(slurp(kData / "tttrr.json"));
+    return acq::make_plan(m, acq::parse_plan_file(slurp(kData / "tttrr-quick.plan.json"), m.geometry.type));
+}
+
+TEST(MeasureUseCase, ANewSessionIsMeasuredAndStoredCompleted) {
+    Dir d;
+    storage::Store store((d.path / "m.db").string());
+    const fs::path program = d.path / "a.nc";
+    const std::string device = d.device(program);
+    const PreparedSession s = new_ssm_session(store, quick_plan(), device);
+    EXPECT_EQ(store.session(s.id).source, storage::SessionSource::emulator);
+    FileOperator op(s.plan, program);
+    const SsmMeasureOptions o = simulated(d, program);
+    const acq::SessionSummary sum = measure_ssm(store, s, op, o);
+    ASSERT_EQ(sum.final_state, acq::State::Done) << sum.reason;
+    EXPECT_EQ(store.session(s.id).state, storage::SessionState::completed);
+    EXPECT_EQ(store.points(s.id).size(), s.plan.points.size());
+    const auto instrument = store.session(s.id).instrument;
+    ASSERT_TRUE(instrument.has_value()) << "the instrument's identity is stored";
+    EXPECT_FALSE(instrument->serial.empty());
+    std::size_t orientation = 0;
+    for (const auto& r : store.results(s.id))
+        if (r.kind == acq::kOrientationResultKind) ++orientation, (void)acq::test_from_json(r.payload_json);
+    EXPECT_EQ(orientation, static_cast<std::size_t>(s.plan.test_count()));
+    // A completed session is not taken up again, and nothing changes.
+    try {
+        (void)resume_ssm_session(store, std::to_string(s.id));
+        FAIL() << "resumed a completed session";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.category(), ErrorCategory::bad_input) << e.what();
+    }
+    EXPECT_EQ(store.session(s.id).state, storage::SessionState::completed);
+}
+
+TEST(MeasureUseCase, AStoppedRunIsTakenUpAfterItsLastPoint) {
+    Dir d;
+    storage::Store store((d.path / "m.db").string());
+    const fs::path program = d.path / "b.nc";
+    const std::string device = d.device(program);
+    const PreparedSession s = new_ssm_session(store, quick_plan(), device);
+    std::atomic<bool> stop{false};
+    FileOperator op(s.plan, program, &stop, 3);
+    SsmMeasureOptions o = simulated(d, program);
+    o.stop = &stop;
+    const acq::SessionSummary first = measure_ssm(store, s, op, o);
+    ASSERT_TRUE(first.interrupted) << first.reason;
+    EXPECT_EQ(store.session(s.id).state, storage::SessionState::interrupted);
+    const std::size_t kept = store.points(s.id).size();
+    ASSERT_GE(kept, 3u);
+    ASSERT_LT(kept, s.plan.points.size());
+
+    const PreparedSession again = resume_ssm_session(store, std::to_string(s.id));
+    EXPECT_EQ(again.done.size(), kept);
+    ASSERT_TRUE(again.before.has_value());
+    EXPECT_EQ(again.before->state, storage::SessionState::interrupted);
+    EXPECT_EQ(again.plan.points.size(), s.plan.points.size()) << "the stored plan";
+    const fs::path program2 = d.path / "b2.nc";
+    FileOperator op2(again.plan, program2);
+    o = simulated(d, program2);
+    const acq::SessionSummary second = measure_ssm(store, again, op2, o);
+    ASSERT_EQ(second.final_state, acq::State::Done) << second.reason;
+    EXPECT_EQ(op2.last_program_points, s.plan.points.size() - kept) << "only the missing points are measured";
+    EXPECT_EQ(store.session(s.id).state, storage::SessionState::completed);
+}
+
+TEST(MeasureUseCase, ASessionThatDoesNotExistIsNotFound) {
+    Dir d;
+    storage::Store store((d.path / "m.db").string());
+    try {
+        (void)resume_ssm_session(store, "42");
+        FAIL() << "no error";
+    } catch (const std::exception& e) {
+        EXPECT_EQ(category_of(e), ErrorCategory::not_found) << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace ballbar::workflow

@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: MIT
+#include "ballbar/workflow/measure.hpp"
+
+#include "ballbar/acquisition/bar_check.hpp"
+#include "ballbar/device/uri.hpp"
+#include "ballbar/workflow/error.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
+#include "ballbar/workflow/session_io.hpp"
+
+namespace ballbar::workflow {
+
+namespace acq = ballbar::acquisition;
+
+namespace {
+
+/// The identity the instrument reported, stored with the session (sessions show, the report).
+void record_instrument(storage::Store& store, std::int64_t id, const device::InstrumentInfo& info) {
+    storage::Instrument in;
+    in.model = info.model;
+    in.serial = info.serial;
+    in.firmware = info.firmware;
+    in.calibrated_length_mm = info.calibrated_length_mm;
+    in.calibration_date = info.calibration_date;
+    store.set_instrument(id, in);
+}
+
+}  // namespace
+
+PreparedSession new_ssm_session(storage::Store& store, const acq::Plan& plan, std::string_view device_uri) {
+    PreparedSession s;
+    s.plan = plan;
+    storage::NewSession ns;
+    ns.machine = plan.machine.geometry;
+    ns.source = device_uri.starts_with("emulator:") ? storage::SessionSource::emulator : storage::SessionSource::device;
+    ns.operator_name = plan.spec.answers.operator_name;
+    ns.procedure = "ssm-two-step";
+    s.id = store.create_session(ns);
+    store.start_session(s.id);
+    store_plan(store, s.id, plan);
+    return s;
+}
+
+PreparedSession resume_ssm_session(storage::Store& store, std::string_view key) {
+    PreparedSession s;
+    s.id = store.find_session(std::string(key));  // StorageError not_found: "no session …"
+    s.before = store.session(s.id);
+    try {
+        s.plan = load_plan(store, s.id);
+    } catch (const acq::PlanError& e) {
+        throw Error(ErrorCategory::bad_input, e.what());
+    }
+    s.done = load_points(store, s.id, s.plan);
+    try {
+        store.resume_session(s.id);
+    } catch (const storage::StorageError& e) {
+        // A completed or aborted session, or one another process is measuring: the request contradicts
+        // the session's state, and changes nothing.
+        if (e.kind() != storage::StorageError::Kind::invalid) throw;
+        throw Error(ErrorCategory::bad_input, e.what());
+    }
+    return s;
+}
+
+acq::SessionSummary measure_ssm(storage::Store& store, const PreparedSession& prepared, acq::Operator& op,
+                                const SsmMeasureOptions& o) {
+    const std::int64_t id = prepared.id;
+    const acq::Plan& plan = prepared.plan;
+    const std::string uri = o.device_uri;
+    DeviceSource source([uri, open = o.open_transport] {
+        if (open) return open();
+        try {
+            return device::open_transport(uri);
+        } catch (const std::invalid_argument& e) {
+            throw acq::SourceError(e.what());
+        }
+    });
+    source.on_identified = [&store, id, &plan, &o](const device::InstrumentInfo& info) {
+        record_instrument(store, id, info);
+        const std::string mismatch = acq::bar_length_mismatch(plan.spec.bar_length_mm, info.calibrated_length_mm,
+                                                              plan.spec.capture.tolerance_mm, o.plan_file);
+        if (!mismatch.empty()) throw acq::InstrumentUnfit(mismatch);
+    };
+    StoreSink sink(store, id, plan);
+    acq::SessionOptions options;
+    options.stop = o.stop;
+    const auto gauge =
+        o.open_transport ? nullptr : make_gauge_source(uri, plan.spec.bar_length_mm);  // (gauge_source.hpp)
+    acq::Session session(plan, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
+    session.restore(prepared.done);
+    const std::uint64_t first_seq = store.next_seq(id);  // this run's samples (a resume continues after)
+    const acq::SessionSummary sum = session.run();
+    sink.finish(sum);
+    if (gauge) store_gauge_instrument(store, id, *gauge, first_seq);  // identity, resolution, rate
+    return sum;
+}
+
+}  // namespace ballbar::workflow
