@@ -291,7 +291,12 @@ EmulatorConfig parse_emulator_config(std::string_view json_text, const std::stri
         throw std::invalid_argument(e.what());
     }
     EmulatorConfig c;
-    only_keys(j, "", {"seed", "instrument", "machine", "program", "faults", "continuous"});
+    only_keys(j, "", {"seed", "time", "instrument", "machine", "program", "faults", "continuous"});
+    if (j.contains("time")) {
+        const json& t = j.at("time");
+        if (!t.is_string() || (t != "real" && t != "simulated")) fail("time", "must be \"real\" or \"simulated\"");
+        c.simulated_time = t == "simulated";
+    }
     if (j.contains("seed")) {
         if (!j.at("seed").is_number_unsigned()) fail("seed", "must be a non-negative integer");
         c.seed = j.at("seed").get<std::uint64_t>();

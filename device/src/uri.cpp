@@ -80,7 +80,8 @@ std::unique_ptr<Transport> open_transport(std::string_view uri) {
     switch (d.scheme) {
         case DeviceUri::Scheme::Emulator: {
             EmulatorConfig cfg = d.path.empty() ? EmulatorConfig{} : load_emulator_config(d.path);
-            return std::make_unique<PipeTransport>(std::make_unique<Emulator>(std::move(cfg)), Pacing::RealTime,
+            const Pacing pacing = cfg.simulated_time ? Pacing::Simulated : Pacing::RealTime;
+            return std::make_unique<PipeTransport>(std::make_unique<Emulator>(std::move(cfg)), pacing,
                                                    std::string(uri));
         }
         case DeviceUri::Scheme::Serial:

@@ -53,10 +53,13 @@ int run(const std::string& args, std::string* out = nullptr) {
 }
 
 /// The emulator's configuration running the NC program `measure` writes to `program` (the emulated
-/// operator loads it and presses cycle start when `measure` starts the stream).
-fs::path emulator_config(const fs::path& dir, const fs::path& program) {
+/// operator loads it and presses cycle start when `measure` starts the stream). On simulated time unless
+/// a test needs the wall clock (to stop a process half-way): a session then takes the CPU's time, not
+/// the machine's 19 s, and what these tests check (prompts, answers, exit codes) is the same.
+fs::path emulator_config(const fs::path& dir, const fs::path& program, bool simulated = true) {
     std::string cfg = slurp(kData / "tttrr-emulator.json");
     cfg.replace(cfg.find("PROGRAM"), 7, program.string());
+    if (simulated) cfg.replace(cfg.find('{'), 1, "{\"time\": \"simulated\",");
     const fs::path path = dir / ("emulator-" + program.stem().string() + ".json");
     std::ofstream(path) << cfg;
     return path;
@@ -164,7 +167,9 @@ TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
 /// docs/procedure.md's two commands, in two processes: `ballbar emulate --pty --config …` and
 /// `ballbar measure --device serial:PTY …` (with --non-interactive), with the given plan; the exit
 /// code, and measure's output in `out`.
-int run_two_processes(const fs::path& db, const fs::path& plan, std::string& out) {
+/// `emulate --pty` and `measure` on its pty, as docs/procedure.md shows them; `fast`: the emulator as fast
+/// as measure reads (`emulate --fast`).
+int run_two_processes(const fs::path& db, const fs::path& plan, std::string& out, bool fast = false) {
     fs::remove(db);
     fs::remove("/tmp/ballbar-session.nc");
     const std::string exe = BALLBAR_EXE;
@@ -176,7 +181,11 @@ int run_two_processes(const fs::path& db, const fs::path& plan, std::string& out
     if (emu == 0) {
         ::dup2(outfd[1], STDOUT_FILENO);
         ::close(outfd[0]);
-        ::execl(exe.c_str(), exe.c_str(), "emulate", "--pty", "--config", cfg.c_str(), static_cast<char*>(nullptr));
+        if (fast)
+            ::execl(exe.c_str(), exe.c_str(), "emulate", "--pty", "--fast", "--config", cfg.c_str(),
+                    static_cast<char*>(nullptr));
+        else
+            ::execl(exe.c_str(), exe.c_str(), "emulate", "--pty", "--config", cfg.c_str(), static_cast<char*>(nullptr));
         ::_exit(127);
     }
     ::close(outfd[1]);
@@ -214,7 +223,7 @@ TEST(CliMeasure, TheDocumentedTwoProcessCommandsCompleteASession) {
 TEST(CliMeasure, ATwoSocketPlanCompletesThroughTheEmulatorOnAPty) {
     const fs::path db = temp_dir() / "two-sockets.db";
     std::string out;
-    const int code = run_two_processes(db, kData / "tttrr-two-sockets.plan.json", out);
+    const int code = run_two_processes(db, kData / "tttrr-two-sockets.plan.json", out, /*fast=*/true);
     EXPECT_EQ(code, 0) << out;
     EXPECT_NE(out.find("move the socket to [-29.275, -24.312, -77.777]"), std::string::npos) << out;
     EXPECT_NE(out.find("completed"), std::string::npos) << out;
@@ -340,7 +349,7 @@ StoppedMeasure measure_then_signal(const fs::path& dir, const fs::path& db, int 
     const std::string plan = (kData / "tttrr-quick.plan.json").string();
     const std::string prog = (dir / "k.nc").string();
     fs::remove(prog);
-    const std::string device = "emulator:" + emulator_config(dir, prog).string();
+    const std::string device = "emulator:" + emulator_config(dir, prog, /*simulated=*/false).string();
     StoppedMeasure r;
     int outfd[2];
     if (::pipe(outfd) != 0) return r;

@@ -3,7 +3,10 @@
 // fault injection, driven through the real driver over the in-process pipe.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numeric>
 #include <vector>
 
@@ -11,6 +14,7 @@
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/instrument.hpp"
 #include "ballbar/device/pipe.hpp"
+#include "ballbar/device/uri.hpp"
 
 using namespace ballbar;
 using namespace ballbar::device;
@@ -403,6 +407,38 @@ TEST(Driver, QueueOverflowIsCountedAndMarked) {
     ASSERT_GT(n, 0u);
     EXPECT_NE(buf[0].flags & kSampleAfterGap, 0);
     EXPECT_EQ(buf[0].seq, 256u);  // host sequence stays contiguous; the loss is in the flag and stats
+}
+
+/// "time": "simulated" puts an `emulator:CONFIG` link on the emulator's own clock: a minute of streaming
+/// takes the CPU's time. The default follows the wall clock; anything else is refused naming the key.
+TEST(Config, SimulatedTimeMakesAnInProcessLinkRunAsFastAsItIsRead) {
+    EXPECT_FALSE(parse_emulator_config("{}").simulated_time);
+    EXPECT_FALSE(parse_emulator_config(R"({"time": "real"})").simulated_time);
+    EXPECT_TRUE(parse_emulator_config(R"({"time": "simulated"})").simulated_time);
+    for (const char* bad : {R"({"time": "fast"})", R"({"time": 1})"}) {
+        try {
+            (void)parse_emulator_config(bad);
+            ADD_FAILURE() << "accepted " << bad;
+        } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find("time: must be"), std::string::npos) << e.what();
+        }
+    }
+    char tmpl[] = "/tmp/ballbar-time-XXXXXX";
+    const std::string dir = ::mkdtemp(tmpl);
+    const std::string cfg = dir + "/sim.json";
+    std::ofstream(cfg) << R"({"time": "simulated", "instrument": {"sample_rate_hz": 1000}})";
+    Instrument inst(open_transport("emulator:" + cfg));
+    (void)inst.identify();
+    inst.start_streaming();
+    const auto t0 = std::chrono::steady_clock::now();
+    std::size_t samples = 0;
+    std::vector<analysis::BarSample> batch(4096);
+    while (samples < 60000) {  // a minute of the bar's samples
+        inst.poll(std::chrono::milliseconds(200));
+        samples += inst.read_samples(batch);
+        ASSERT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(20)) << "not the wall clock's minute";
+    }
+    std::filesystem::remove_all(dir);
 }
 
 TEST(Config, ParsesEverySectionAndRejectsMistakes) {

@@ -72,6 +72,10 @@ struct NcSource {
 
 struct EmulatorConfig {
     std::uint64_t seed = 1;
+    /// "time": "simulated": an in-process emulator (`emulator:CONFIG`) runs as fast as its host reads, its
+    /// timeouts counted on its own clock (CI: a session takes the CPU's time, not the machine's);
+    /// "real" (the default) follows the wall clock. Hosts that serve a pty or TCP choose their own pacing.
+    bool simulated_time = false;
     InstrumentModel instrument;
     MachineSetup machine;
     std::optional<NcSource> program;  ///< the machine's program (power-on or cycle start)
