@@ -23,6 +23,7 @@
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/model_codec.hpp"
+#include "ballbar/storage/offsets_codec.hpp"
 #include "ballbar/storage/store.hpp"
 #include "command.hpp"
 #include "files.hpp"
@@ -141,82 +142,13 @@ class OutputFile {
     fileio::OutputFile file_;
 };
 
-/// The work-offset and tool table (docs/compensation.md, "The offsets table").
+/// The work-offset and tool table (docs/compensation.md, "The offsets table"), read by its codec.
 ba::NcOffsetTable parse_offsets(const std::string& text, const std::string& source) {
-    json j;
     try {
-        j = json::parse(text);
-    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
-        throw Error(ErrorCategory::bad_input, source + ": malformed JSON: " + e.what());
+        return bs::offsets_from_json(text);
+    } catch (const bs::FormatError& e) {
+        throw Error(ErrorCategory::bad_input, source + ": " + e.what());
     }
-    if (!j.is_object()) throw Error(ErrorCategory::bad_input, source + ": the table must be a JSON object");
-    // Positions and lengths within ±100 m, rotary offsets within ±36000° (docs/compensation.md).
-    auto number = [&](const json& v, const std::string& field) {
-        if (!v.is_number()) throw Error(ErrorCategory::bad_input, source + ": " + field + ": must be a number");
-        const bool deg = field.size() > 4 && field.compare(field.size() - 4, 4, "_deg") == 0;
-        const double lim = deg ? ba::limits::kRotary_deg : ba::limits::kPosition_mm;
-        if (const std::string why = ba::limits::check_in(v.get<double>(), -lim, lim, deg ? "deg" : "mm"); !why.empty())
-            throw Error(ErrorCategory::bad_input, source + ": " + field + " " + why);
-        return v.get<double>();
-    };
-    ba::NcOffsetTable t;
-    for (const auto& item : j.items()) {
-        const std::string& key = item.key();
-        if (key == "format") {
-            if (item.value() != "ballbar-nc-offsets/1")
-                throw Error(ErrorCategory::bad_input,
-                            source + ": format " + item.value().dump() + " is not ballbar-nc-offsets/1");
-        } else if (key == "measured_tool_length_mm") {
-            t.measured_tool_length_mm = number(item.value(), key);
-        } else if (key == "work_offsets") {
-            if (!item.value().is_object())
-                throw Error(ErrorCategory::bad_input, source + ": work_offsets must be an object");
-            for (const auto& w : item.value().items()) {
-                static const char* names[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
-                if (std::find(std::begin(names), std::end(names), w.key()) == std::end(names))
-                    throw Error(ErrorCategory::bad_input,
-                                source + ": work_offsets." + w.key() + ": not G54–G59 or G59.1–G59.3");
-                if (!w.value().is_object())
-                    throw Error(ErrorCategory::bad_input, source + ": work_offsets." + w.key() + " must be an object");
-                ba::Pose p;
-                for (const auto& a : w.value().items()) {
-                    const std::string f = "work_offsets." + w.key() + "." + a.key();
-                    const double v = number(a.value(), f);
-                    if (a.key() == "X_mm")
-                        p.X_mm = v;
-                    else if (a.key() == "Y_mm")
-                        p.Y_mm = v;
-                    else if (a.key() == "Z_mm")
-                        p.Z_mm = v;
-                    else if (a.key() == "A_deg")
-                        p.A_rad = ba::deg_to_rad(v);
-                    else if (a.key() == "B_deg")
-                        p.B_rad = ba::deg_to_rad(v);
-                    else if (a.key() == "C_deg")
-                        p.C_rad = ba::deg_to_rad(v);
-                    else
-                        throw Error(ErrorCategory::bad_input,
-                                    source + ": " + f + ": unknown (X_mm Y_mm Z_mm A_deg B_deg C_deg)");
-                }
-                t.work[w.key()] = p;
-            }
-        } else if (key == "tools") {
-            if (!item.value().is_object()) throw Error(ErrorCategory::bad_input, source + ": tools must be an object");
-            for (const auto& tl : item.value().items()) {
-                const std::string& k = tl.key();
-                if (k.empty() || k.size() > 6 ||
-                    !std::all_of(k.begin(), k.end(), [](char c) { return c >= '0' && c <= '9'; }))
-                    throw Error(ErrorCategory::bad_input, source + ": tools." + k + ": the key must be a tool number");
-                if (!tl.value().is_object() || !tl.value().contains("length_mm") || tl.value().size() != 1)
-                    throw Error(ErrorCategory::bad_input, source + ": tools." + k + " must be {\"length_mm\": L}");
-                t.tool_length_mm[std::stoi(k)] = number(tl.value()["length_mm"], "tools." + k + ".length_mm");
-            }
-        } else {
-            throw Error(ErrorCategory::bad_input,
-                        source + ": " + key + ": unknown field (work_offsets, tools, measured_tool_length_mm)");
-        }
-    }
-    return t;
 }
 
 std::vector<std::string> split_codes(const std::string& list) {

@@ -9,6 +9,7 @@
 
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/model_codec.hpp"
+#include "ballbar/storage/offsets_codec.hpp"
 
 namespace ballbar::storage {
 namespace {
@@ -103,6 +104,53 @@ TEST(ModelCodec, RefusesWhatTheFormatDoesNotAllowNamingTheKey) {
             ADD_FAILURE() << "accepted: " << c.text;
         } catch (const FormatError& e) {
             EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what() << "\n  for " << c.text;
+        }
+    }
+}
+
+}  // namespace
+}  // namespace ballbar::storage
+
+namespace ballbar::storage {
+namespace {
+
+// The offsets table, ballbar-nc-offsets/1 (docs/compensation.md, "The offsets table").
+TEST(OffsetsCodec, ReadsTheDocumentedTableAndWritesItBack) {
+    const analysis::NcOffsetTable t = offsets_from_json(R"({"format": "ballbar-nc-offsets/1",
+        "work_offsets": {"G54": {"X_mm": 10, "Y_mm": -5, "Z_mm": -80, "A_deg": 0, "C_deg": 90},
+                         "G59.1": {"Z_mm": 1.5}},
+        "tools": {"1": {"length_mm": 80}}, "measured_tool_length_mm": 50})");
+    ASSERT_EQ(t.work.size(), 2u);
+    EXPECT_DOUBLE_EQ(t.work.at("G54").Y_mm, -5);
+    EXPECT_DOUBLE_EQ(t.work.at("G54").C_rad, analysis::kPi / 2);
+    EXPECT_DOUBLE_EQ(t.work.at("G59.1").X_mm, 0) << "missing axes are 0";
+    EXPECT_DOUBLE_EQ(t.tool_length_mm.at(1), 80);
+    EXPECT_DOUBLE_EQ(t.measured_tool_length_mm, 50);
+    const analysis::NcOffsetTable back = offsets_from_json(offsets_to_json(t));
+    EXPECT_EQ(offsets_to_json(back), offsets_to_json(t));
+    EXPECT_NEAR(back.work.at("G54").C_rad, t.work.at("G54").C_rad, 1e-15);
+}
+
+TEST(OffsetsCodec, RefusesWhatTheFormatDoesNotAllowNamingTheKey) {
+    const struct {
+        const char* text;
+        const char* says;
+    } cases[] = {
+        {R"({"format": "ballbar-nc-offsets/2"})", "is not ballbar-nc-offsets/1"},
+        {R"({"work_offsets": {"G60": {}}})", "work_offsets.G60: not G54"},
+        {R"({"work_offsets": {"G54": {"U_mm": 1}}})", "work_offsets.G54.U_mm: unknown"},
+        {R"({"work_offsets": {"G54": {"X_mm": 1e9}}})", "work_offsets.G54.X_mm"},
+        {R"({"tools": {"T1": {"length_mm": 1}}})", "tools.T1: the key must be a tool number"},
+        {R"({"tools": {"1": {"length_mm": 1, "radius_mm": 2}}})", "tools.1 must be"},
+        {R"({"offsets": {}})", "offsets: unknown field"},
+        {R"([1, 2])", "must be a JSON object"},
+    };
+    for (const auto& c : cases) {
+        try {
+            (void)offsets_from_json(c.text);
+            ADD_FAILURE() << "accepted " << c.text;
+        } catch (const FormatError& e) {
+            EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
         }
     }
 }
