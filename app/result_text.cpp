@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // What `sessions show` says of each stored result: its values, with units and uncertainties
 // (figures.hpp). The procedure's results are read by their codec (acquisition/result_codec.hpp), the
-// others as app/ stores them (cmd_identify.cpp, cmd_discover.cpp, cmd_demo.cpp, gauge_source.cpp);
-// anything else shows its numbers by name.
+// identification by its (storage/identification_codec.hpp), the others as app/ stores them (cmd_discover.cpp,
+// cmd_demo.cpp, gauge_source.cpp); anything else shows its numbers by name.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +11,8 @@
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/analysis/error_params.hpp"
 #include "ballbar/analysis/orientation.hpp"
+#include "ballbar/storage/identification_codec.hpp"
+#include "ballbar/storage/machine_json.hpp"
 #include "figures.hpp"
 
 namespace ballbar::app {
@@ -74,21 +76,18 @@ std::vector<std::string> orientation_lines(std::string_view payload, ba::Machine
     return {line};
 }
 
-std::vector<std::string> identification_lines(const json& j) {
+std::vector<std::string> identification_lines(std::string_view payload) {
+    const storage::IdentificationRecord r = storage::identification_from_json(payload);
     char buf[200];
-    std::snprintf(buf, sizeof buf, "%s, %d readings, residual RMS %.3f µm",
-                  j.value("converged", false) ? "converged" : "NOT converged", j.value("readings", 0),
-                  num(j, "residual_rms_um"));
+    std::snprintf(buf, sizeof buf, "%s, %d readings, residual RMS %.3f µm", r.converged ? "converged" : "NOT converged",
+                  r.readings, r.residual_rms_um);
     std::vector<std::string> out{buf};
-    if (!j.contains("estimates") || !j["estimates"].is_array()) return out;
     std::string line;
-    for (const auto& e : j["estimates"]) {
-        if (!e.is_object() || !e.value("observable", false)) continue;
-        const std::string name = e.value("name", "?");
+    for (const auto& e : r.estimates) {
+        if (!e.observable) continue;
         ScreenUnit u{1e3, "µm"};  // socket offsets: mm
-        if (const auto p = ba::parse_param(name)) u = screen_unit(ba::param_info(*p).unit);
-        const std::string item =
-            name + " " + with_uncertainty(num(e, "estimate") * u.factor, num(e, "std") * u.factor, u.symbol);
+        if (const auto p = ba::parse_param(e.name)) u = screen_unit(ba::param_info(*p).unit);
+        const std::string item = e.name + " " + with_uncertainty(e.estimate * u.factor, e.std * u.factor, u.symbol);
         if (!line.empty() && line.size() + item.size() > 100) {
             out.push_back(line);
             line.clear();
@@ -165,7 +164,7 @@ std::vector<std::string> result_lines(std::string_view kind, std::string_view pa
     try {
         if (kind == acq::kSsmResultKind) return ssm_lines(payload_json);
         if (kind == acq::kOrientationResultKind) return orientation_lines(payload_json, machine);
-        if (kind == "identification") return identification_lines(j);
+        if (kind == storage::kIdentificationResultKind) return identification_lines(payload_json);
         if (kind == "discovery") return discovery_lines(j);
         if (kind == "compensation") return compensation_lines(j);
         if (kind == "instrument") return instrument_lines(j);
@@ -174,6 +173,8 @@ std::vector<std::string> result_lines(std::string_view kind, std::string_view pa
     } catch (const json::exception&) {
         return {"(values not readable: " + std::string(kind) + " payload of another shape)"};
     } catch (const acq::ResultFormatError& e) {
+        return {std::string("(values not readable: ") + e.what() + ")"};
+    } catch (const storage::FormatError& e) {
         return {std::string("(values not readable: ") + e.what() + ")"};
     }
 }

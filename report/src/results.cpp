@@ -9,6 +9,8 @@
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/types.hpp"
+#include "ballbar/storage/identification_codec.hpp"
+#include "ballbar/storage/machine_json.hpp"
 #include "circular.hpp"
 
 namespace ballbar::report {
@@ -37,12 +39,6 @@ double num(std::string_view kind, const json& j, const char* key) {
     const auto v = opt_num(kind, j, key);
     if (!v) bad(kind, key, "is missing");
     return *v;
-}
-int opt_int(std::string_view kind, const json& j, const char* key, int fallback) {
-    const json* v = find(j, key);
-    if (!v) return fallback;
-    if (!v->is_number_integer()) bad(kind, key, "must be an integer");
-    return v->get<int>();
 }
 std::string opt_str(std::string_view kind, const json& j, const char* key) {
     const json* v = find(j, key);
@@ -121,32 +117,31 @@ std::pair<double, std::string> display_unit(const std::string& unit) {
     return {1.0, unit};
 }
 
-void add_identification(Report& r, std::string_view kind, const json& p) {
+// `identify`'s result, read by its codec (storage/identification_codec.hpp). The model's name and
+// version are the stored model's (build.cpp); a result given alone has none.
+void add_identification(Report& r, const json& p) {
+    storage::IdentificationRecord x;
+    try {
+        x = storage::identification_from_json(p.dump());
+    } catch (const storage::FormatError& e) {
+        throw ReportError(e.what());
+    }
     IdentifiedModel m;
-    m.name = opt_str(kind, p, "name");
-    if (const json* c = find(p, "converged")) m.converged = c->is_boolean() ? c->get<bool>() : false;
-    if (find(p, "iterations")) m.iterations = opt_int(kind, p, "iterations", 0);
-    if (const auto v = opt_num(kind, p, "initial_rms_mm")) m.residual_rms_before_um = *v * 1000;
-    if (const auto v = opt_num(kind, p, "residual_rms_mm")) m.residual_rms_after_um = *v * 1000;
-    if (const auto v = opt_num(kind, p, "initial_rms_um")) m.residual_rms_before_um = *v;  // `ballbar identify`
-    if (const auto v = opt_num(kind, p, "residual_rms_um")) m.residual_rms_after_um = *v;
-    m.condition = opt_num(kind, p, "condition");
-    const json* est = find(p, "estimates");
-    if (est && !est->is_array()) bad(kind, "estimates", "must be an array");
-    if (est)
-        for (const auto& e : *est) {
-            ModelParameter mp;
-            mp.name = opt_str(kind, e, "name");
-            const auto [factor, unit] = display_unit(opt_str(kind, e, "unit"));
-            mp.unit = unit;
-            mp.value = num(kind, e, find(e, "estimate") ? "estimate" : "value") * factor;
-            if (const auto u = opt_num(kind, e, "std")) mp.uncertainty = *u * factor;
-            mp.observability = opt_num(kind, e, "independence");
-            mp.note = opt_str(kind, e, "note");
-            if (const json* o = find(e, "observable"); o && o->is_boolean() && !o->get<bool>() && mp.note.empty())
-                mp.note = "not observable: held fixed";
-            m.parameters.push_back(mp);
-        }
+    m.converged = x.converged;
+    m.iterations = x.iterations;
+    if (x.initial_rms_um) m.residual_rms_before_um = *x.initial_rms_um;
+    m.residual_rms_after_um = x.residual_rms_um;
+    for (const auto& e : x.estimates) {
+        ModelParameter mp;
+        mp.name = e.name;
+        const auto [factor, unit] = display_unit(e.unit);
+        mp.unit = unit;
+        mp.value = e.estimate * factor;
+        mp.uncertainty = e.std * factor;
+        mp.observability = e.independence;
+        if (!e.observable) mp.note = "not observable: held fixed";
+        m.parameters.push_back(mp);
+    }
     r.model = m;
 }
 
@@ -318,8 +313,8 @@ bool add_known_result(Report& report, std::string_view kind, const nlohmann::jso
         add_ssm(report, payload);
     else if (kind == acquisition::kOrientationResultKind)
         add_orientation(report, payload);
-    else if (kind == "identification")
-        add_identification(report, kind, payload);
+    else if (kind == storage::kIdentificationResultKind)
+        add_identification(report, payload);
     else if (kind == "discovery")
         add_discovery(report, kind, payload);
     else if (kind == "compensation")

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "ballbar/storage/identification_codec.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/model_codec.hpp"
 #include "ballbar/storage/offsets_codec.hpp"
@@ -148,6 +149,85 @@ TEST(OffsetsCodec, RefusesWhatTheFormatDoesNotAllowNamingTheKey) {
     for (const auto& c : cases) {
         try {
             (void)offsets_from_json(c.text);
+            ADD_FAILURE() << "accepted " << c.text;
+        } catch (const FormatError& e) {
+            EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
+        }
+    }
+}
+
+}  // namespace
+}  // namespace ballbar::storage
+
+namespace ballbar::storage {
+namespace {
+
+// The identification result (docs/identification.md): what `identify --json` prints and stores.
+TEST(IdentificationCodec, ReadsAResultAsIdentifyWritesItAndOneStoredBeforeTheNoiseFloor) {
+    const IdentificationRecord r = identification_from_json(R"({"converged":true,"iterations":4,"message":"ok",
+        "readings":90,"degrees_of_freedom":81,"residual_rms_um":0.09,"residual_sigma_um":0.1,"initial_rms_um":30.5,
+        "estimates":[{"name":"X0C","estimate":0.03,"std":1e-5,"sensitivity":0.9,"independence":0.8,"observable":true,
+                      "unit":"mm"},
+                     {"name":"C_zero","estimate":0,"std":0,"sensitivity":0,"independence":0,"observable":false,
+                      "unit":"rad"}],
+        "correlation":[[1]],"correlation_names":["X0C"]})");
+    EXPECT_TRUE(r.converged);
+    EXPECT_EQ(r.readings, 90);
+    EXPECT_DOUBLE_EQ(r.initial_rms_um.value_or(0), 30.5);
+    EXPECT_FALSE(r.noise_floor_um.has_value()) << "stored before the noise floor was written";
+    ASSERT_EQ(r.estimates.size(), 2u);
+    EXPECT_EQ(r.estimates[1].unit, "rad");
+    EXPECT_FALSE(r.estimates[1].observable);
+    EXPECT_FALSE(r.model.has_value());
+}
+
+TEST(IdentificationCodec, WhatTheFitWritesReadsBack) {
+    analysis::FitSummary fit;
+    fit.converged = true;
+    fit.iterations = 3;
+    fit.readings = 12;
+    fit.residual_rms_mm = 1e-4 / 3;
+    fit.noise_floor_mm = 1e-5;
+    analysis::ParamEstimate e;
+    e.name = "Y0C";
+    e.param = analysis::Param::Y0C;
+    e.estimate = -0.02 / 3;
+    e.std = 1e-6;
+    e.observable = true;
+    fit.estimates = {e};
+    fit.fitted = {0};
+    fit.correlation = Eigen::MatrixXd::Identity(1, 1);
+    ErrorModel m;
+    m.machine.type = analysis::MachineType::TTTRR;
+    m.params = {{analysis::Param::Y0C, e.estimate, e.std}};
+    const IdentificationRecord r = identification_from_json(identification_to_json(fit, m));
+    EXPECT_EQ(r.residual_rms_um, 1e-4 / 3 * 1e3);
+    EXPECT_EQ(r.noise_floor_um.value_or(0), 1e-2);
+    ASSERT_EQ(r.estimates.size(), 1u);
+    EXPECT_EQ(r.estimates[0].estimate, -0.02 / 3);
+    EXPECT_EQ(r.estimates[0].unit, "mm");
+    ASSERT_TRUE(r.model.has_value());
+    EXPECT_EQ(r.model->values()[analysis::Param::Y0C], -0.02 / 3);
+    ASSERT_EQ(r.correlation.size(), 1u);
+    EXPECT_EQ(r.correlation[0][0], 1.0);
+}
+
+TEST(IdentificationCodec, APayloadOfAnotherShapeIsRefusedNamingTheKey) {
+    const std::string ok = R"("converged":true,"residual_rms_um":0.1,"estimates":[])";
+    const struct {
+        std::string text, says;
+    } cases[] = {
+        {R"({"residual_rms_um":0.1,"estimates":[]})", "\"converged\" is missing"},
+        {"{" + ok + R"(,"rms_um":1})", "\"rms_um\" is not a key it has"},
+        {"{" + ok + R"(,"readings":-1})", "\"readings\" must be a non-negative integer"},
+        {R"({"converged":true,"residual_rms_um":0.1,"estimates":[{"name":"X0C","estimate":1}]})",
+         "\"estimates[0].std\" is missing"},
+        {"{" + ok + R"(,"correlation":[[1,0]],"correlation_names":["X0C"]})", "\"correlation\" must be a square"},
+        {"{" + ok + R"(,"model":{"params":{}}})", "\"model\" is not a model"},
+    };
+    for (const auto& c : cases) {
+        try {
+            (void)identification_from_json(c.text);
             ADD_FAILURE() << "accepted " << c.text;
         } catch (const FormatError& e) {
             EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();

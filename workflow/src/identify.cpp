@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <nlohmann/json.hpp>
 
+#include "ballbar/storage/identification_codec.hpp"
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/workflow/error.hpp"
@@ -13,7 +13,6 @@ namespace ballbar::workflow {
 
 namespace ba = ballbar::analysis;
 namespace bs = ballbar::storage;
-using nlohmann::json;
 
 bool looks_like_session_key(std::string_view arg) {
     return !arg.empty() && std::all_of(arg.begin(), arg.end(), [](char c) {
@@ -70,47 +69,6 @@ bs::ErrorModel fitted_model(const ba::MachineGeometry& machine, const ba::FitSum
     return m;
 }
 
-namespace {
-
-json summary_json(const ba::FitSummary& fit) {
-    json j;
-    j["converged"] = fit.converged;
-    j["iterations"] = fit.iterations;
-    j["message"] = fit.message;
-    j["readings"] = fit.readings;
-    j["degrees_of_freedom"] = fit.degrees_of_freedom;
-    j["residual_rms_um"] = fit.residual_rms_mm * 1e3;
-    j["residual_sigma_um"] = fit.residual_sigma_mm * 1e3;
-    j["noise_floor_um"] = fit.noise_floor_mm * 1e3;
-    j["uncertainty_from_noise_floor"] = fit.uncertainty_from_floor;
-    j["initial_rms_um"] = fit.initial_rms_mm * 1e3;
-    j["estimates"] = json::array();
-    for (const auto& e : fit.estimates) {
-        json x{{"name", e.name},
-               {"estimate", e.estimate},
-               {"std", e.std},
-               {"sensitivity", e.sensitivity},
-               {"independence", e.independence},
-               {"observable", e.observable}};
-        if (e.param)
-            x["unit"] = std::string(ba::to_string(ba::param_info(*e.param).unit));
-        else
-            x["unit"] = "mm";
-        j["estimates"].push_back(x);
-    }
-    j["correlation"] = json::array();
-    for (Eigen::Index r = 0; r < fit.correlation.rows(); ++r) {
-        json row = json::array();
-        for (Eigen::Index c = 0; c < fit.correlation.cols(); ++c) row.push_back(fit.correlation(r, c));
-        j["correlation"].push_back(row);
-    }
-    j["correlation_names"] = json::array();
-    for (std::size_t i : fit.fitted) j["correlation_names"].push_back(fit.estimates[i].name);
-    return j;
-}
-
-}  // namespace
-
 IdentifyResult identify(ReadingInputs inputs, const IdentifyOptions& options, const StoreOpener& for_writing) {
     ba::ReadingSet readings;
     try {
@@ -129,9 +87,7 @@ IdentifyResult identify(ReadingInputs inputs, const IdentifyOptions& options, co
     }
     r.model = fitted_model(readings.machine, r.fit);
     const std::string model = bs::model_to_json(r.model);
-    json payload = summary_json(r.fit);
-    payload["model"] = json::parse(model);
-    r.payload_json = payload.dump();
+    r.payload_json = bs::identification_to_json(r.fit, r.model);
     if (options.store_model && r.fit.converged) {
         bs::Store& st = for_writing();
         const std::string name = !options.model_name.empty()      ? options.model_name
@@ -139,7 +95,8 @@ IdentifyResult identify(ReadingInputs inputs, const IdentifyOptions& options, co
                                                                   : std::string(ba::to_string(readings.machine.type));
         r.stored = st.save_model(name, model, inputs.sessions, std::nullopt, "ballbar identify");
         for (std::int64_t s : inputs.sessions)
-            st.add_result(s, "identification", r.payload_json, r.stored->id, "ballbar identify/1");
+            st.add_result(s, std::string(bs::kIdentificationResultKind), r.payload_json, r.stored->id,
+                          "ballbar identify/1");
     }
     return r;
 }

@@ -16,6 +16,7 @@
 #include "ballbar/report/decimate.hpp"
 #include "ballbar/report/results.hpp"
 #include "ballbar/storage/circular_result.hpp"
+#include "ballbar/storage/identification_codec.hpp"
 #include "ballbar/storage/session_clock.hpp"
 #include "ballbar/storage/trace_file.hpp"
 
@@ -230,14 +231,14 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
             const double wall = parse_iso8601(res.created_at);
             payload["time_s"] = std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0;
         }
-        if (res.kind == "identification" && payload.is_object() && !payload.contains("name") && res.model_id) {
-            const storage::ModelRecord m = store.model(*res.model_id);  // the model version it produced
-            payload["name"] = m.name + " v" + std::to_string(m.version);
-        }
         try {
             add_result(r, res.kind, payload);
         } catch (const ReportError& e) {
             throw ReportError("result " + std::to_string(res.id) + ": " + e.what());
+        }
+        if (res.kind == storage::kIdentificationResultKind && r.model && res.model_id) {
+            const storage::ModelRecord m = store.model(*res.model_id);  // the model version it produced
+            r.model->name = m.name + " v" + std::to_string(m.version);
         }
     }
     if (info.procedure == "circular") add_circular_test(r, store, session_id, circular_result);
