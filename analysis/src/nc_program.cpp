@@ -13,6 +13,7 @@
 
 #include "ballbar/analysis/decimal_text.hpp"
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/analysis/nc_lexer.hpp"
 
 namespace ballbar::analysis {
 namespace {
@@ -31,74 +32,13 @@ std::string_view trim(std::string_view s) {
     return s;
 }
 
-/// Removes "( ... )" comments (both dialects) and "; ..." (LinuxCNC) from a line; returns the comment text.
+/// Removes "( ... )" comments (both dialects) and "; ..." (LinuxCNC) from a line; returns the comment text
+/// (nc_lexer.hpp).
 std::string strip_comments(std::string& code, int line, NcDialect dialect) {
-    std::string comment;
-    std::string out;
-    out.reserve(code.size());
-    for (std::size_t i = 0; i < code.size(); ++i) {
-        const char c = code[i];
-        if (c == '(') {
-            const std::size_t end = code.find(')', i + 1);
-            if (end == std::string::npos) throw NcError(line, "comment opened with '(' is not closed");
-            if (!comment.empty()) comment += ' ';
-            comment += trim(std::string_view(code).substr(i + 1, end - i - 1));
-            i = end;
-        } else if (c == ';' && dialect == NcDialect::LinuxCNC) {
-            if (!comment.empty()) comment += ' ';
-            comment += trim(std::string_view(code).substr(i + 1));
-            break;
-        } else {
-            out += c;
-        }
-    }
-    code = std::move(out);
+    std::string comment, buffer;
+    const std::string_view rest = split_nc_comments(code, line, dialect == NcDialect::LinuxCNC, buffer, comment);
+    if (rest.size() != code.size()) code = std::string(rest);
     return comment;
-}
-
-double parse_number(std::string_view text, std::size_t& pos, int line, char letter) {
-    const std::size_t start = pos;
-    if (pos < text.size() && (text[pos] == '+' || text[pos] == '-')) ++pos;
-    while (pos < text.size() && ((text[pos] >= '0' && text[pos] <= '9') || text[pos] == '.')) ++pos;
-    if (exponent_at(text, pos)) {  // "X1e308": a number NC does not have, not an X word and an E word
-        std::size_t end = pos + 1;
-        while (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) || text[end] == '+' ||
-                                     text[end] == '-' || text[end] == '.'))
-            ++end;
-        throw NcError(line, std::string("word ") + letter + " has a malformed or out-of-range number '" +
-                                shown_token(text.substr(start, end - start)) +
-                                "' (NC numbers are plain decimals, without an exponent)");
-    }
-    const std::string_view num = text.substr(start, pos - start);
-    if (num.empty() || num == "+" || num == "-" || num == ".")
-        throw NcError(line, std::string("word ") + letter + " has no number");
-    // from_chars rejects a leading '+' and a bare leading '.', both legal in NC programs: those
-    // (rare) spellings are rewritten in a small buffer first.
-    const char* first = num.data();
-    const char* last = num.data() + num.size();
-    char buf[72];
-    const bool plain = (num[0] >= '0' && num[0] <= '9') || (num[0] == '-' && num.size() > 1 && num[1] != '.');
-    if (!plain) {
-        std::string_view digits = num;
-        bool negative = false;
-        if (digits.front() == '+' || digits.front() == '-') {
-            negative = digits.front() == '-';
-            digits.remove_prefix(1);
-        }
-        if (digits.size() + 2 > sizeof buf)
-            throw NcError(line, std::string("word ") + letter + " has a malformed number '" + shown_token(num) + "'");
-        std::size_t k = 0;
-        if (negative) buf[k++] = '-';
-        if (digits.front() == '.') buf[k++] = '0';
-        digits.copy(buf + k, digits.size());
-        first = buf;
-        last = buf + k + digits.size();
-    }
-    double value = 0;
-    const auto res = std::from_chars(first, last, value);
-    if (res.ec != std::errc() || res.ptr != last)
-        throw NcError(line, std::string("word ") + letter + " has a malformed number '" + shown_token(num) + "'");
-    return value;
 }
 
 /// Lines the writer emits itself: absolute/metric set-up and program end.
@@ -299,7 +239,7 @@ bool NcReader::next(NcBlock& block) {
             if (c < 'A' || c > 'Z') throw NcError(line_no, std::string("unexpected character '") + body[i] + "'");
             ++i;
             while (i < body.size() && body[i] == ' ') ++i;
-            const double v = parse_number(body, i, line_no, c);
+            const double v = read_nc_number(body, i, line_no, c);
             switch (c) {
                 case 'N':
                     break;  // sequence number

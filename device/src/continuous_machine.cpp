@@ -10,6 +10,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "ballbar/analysis/nc_lexer.hpp"
 #include "ballbar/analysis/types.hpp"
 
 namespace ballbar::device {
@@ -44,14 +45,8 @@ Words parse_words(std::string_view line, int line_no) {
         ++pos;
         skip_space();
         const std::size_t begin = pos;
-        if (pos < line.size() && (line[pos] == '+' || line[pos] == '-')) ++pos;
-        while (pos < line.size() && (std::isdigit(static_cast<unsigned char>(line[pos])) || line[pos] == '.')) ++pos;
-        std::string text(line.substr(begin, pos - begin));
-        if (!text.empty() && text[0] == '+') text.erase(0, 1);
-        double value = 0;
-        const auto r = std::from_chars(text.data(), text.data() + text.size(), value);
-        if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size())
-            throw analysis::NcError(line_no, std::string("word ") + letter + " has no number");
+        const double value = analysis::read_nc_number(line, pos, line_no, letter);  // nc_lexer.hpp
+        const std::string text(line.substr(begin, pos - begin));
         switch (letter) {
             case 'G': {
                 if (value != std::floor(value))
@@ -97,27 +92,15 @@ Words parse_words(std::string_view line, int line_no) {
     return w;
 }
 
-/// The program line without comments, trimmed.
-std::string strip(std::string_view raw) {
-    std::string out;
-    bool in_paren = false;
-    for (char c : raw) {
-        if (in_paren) {
-            if (c == ')') in_paren = false;
-            continue;
-        }
-        if (c == '(') {
-            in_paren = true;
-            continue;
-        }
-        if (c == ';') break;
-        if (c == '\r') continue;
-        out += c;
-    }
-    const auto b = out.find_first_not_of(" \t");
-    if (b == std::string::npos) return {};
-    const auto e = out.find_last_not_of(" \t");
-    return out.substr(b, e - b + 1);
+/// The program line without its comments ("( … )", "; …": nc_lexer.hpp), trimmed.
+std::string strip(std::string_view raw, int line_no) {
+    std::string buffer, comment;
+    const std::string_view code =
+        analysis::split_nc_comments(raw, line_no, /*semicolon_comments=*/true, buffer, comment);
+    const auto b = code.find_first_not_of(" \t\r");
+    if (b == std::string_view::npos) return {};
+    const auto e = code.find_last_not_of(" \t\r");
+    return std::string(code.substr(b, e - b + 1));
 }
 
 double dist(const Xyz& a, const Xyz& b) {
@@ -163,7 +146,7 @@ std::vector<PathSegment> parse_motion_program(std::string_view text, analysis::N
         const std::string_view raw = text.substr(at, nl == std::string_view::npos ? std::string_view::npos : nl - at);
         at = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
         ++line_no;
-        const std::string line = strip(raw);
+        const std::string line = strip(raw, line_no);
         if (line.empty() || line == "%") continue;
         if ((line[0] == 'O' || line[0] == 'o') && line.size() > 1 && std::isdigit(static_cast<unsigned char>(line[1])))
             continue;

@@ -122,7 +122,7 @@ TEST(NcProgram, RefusesWhatItCannotRunWithTheLine) {
         {"G20\n", "inch", 1},
         {"G0 X1\nG4\n", "needs a P word", 2},
         {"X1\n", "before any G0/G1", 1},
-        {"G0 X1..2\n", "malformed number", 1},
+        {"G0 X1..2\n", "malformed or out-of-range number", 1},
         {"G0 X\n", "has no number", 1},
         {"G0 X1 (open\n", "not closed", 1},
         {"G0 X1\nG1 F-5 X2\n", "positive", 2},
