@@ -7,6 +7,8 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "ballbar/fileio/json_fields.hpp"
+
 namespace ballbar::acquisition {
 namespace {
 
@@ -21,59 +23,41 @@ json angles(const std::optional<analysis::OrientationErrors>& e) {
     return {{"d_alpha_rad", e->d_alpha_rad}, {"d_beta_rad", e->d_beta_rad}, {"d_gamma_rad", e->d_gamma_rad}};
 }
 
-/// Reads one payload of `kind`, naming it in every message.
-class Reader {
-  public:
-    Reader(std::string_view kind, std::string_view text, std::initializer_list<std::string_view> keys) : kind_(kind) {
-        try {
-            j_ = json::parse(text);
-        } catch (const json::exception& e) {
-            fail("", std::string("is not valid JSON: ") + e.what());
-        }
-        if (!j_.is_object()) fail("", "is not a JSON object");
-        for (const auto& item : j_.items())
-            if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) fail(item.key(), "is not a key it has");
+/// Parses one payload of `kind`; every error names the kind and the key.
+json parse(std::string_view kind, std::string_view text) {
+    try {
+        return json::parse(text);
+    } catch (const json::exception& e) {
+        throw ResultFormatError("result \"" + std::string(kind) + "\" is not valid JSON: " + e.what());
     }
-    const json& root() const { return j_; }
+}
 
-    [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-        throw ResultFormatError("result \"" + kind_ + "\"" + (key.empty() ? "" : ": \"" + key + "\"") + " " + what);
-    }
-    const json& at(const json& j, const std::string& key) const {
-        const auto it = j.find(key);
-        if (it == j.end()) fail(key, "is missing");
-        return *it;
-    }
-    double number(const json& v, const std::string& key) const {
-        if (!v.is_number() || !std::isfinite(v.get<double>())) fail(key, "must be a finite number");
-        return v.get<double>();
-    }
-    int count(const json& v, const std::string& key, int lo = 0) const {
-        if (!v.is_number_integer() || v.get<std::int64_t>() < lo || v.get<std::int64_t>() > 1'000'000'000)
-            fail(key, "must be an integer of at least " + std::to_string(lo));
-        return v.get<int>();
-    }
-    analysis::Vec3 vec3(const json& v, const std::string& key) const {
-        if (!v.is_array() || v.size() != 3) fail(key, "must be an array of three numbers");
-        return {number(v[0], key), number(v[1], key), number(v[2], key)};
-    }
-    std::optional<analysis::OrientationErrors> angles(const json& v, const std::string& key) const {
-        if (v.is_null()) return std::nullopt;
-        if (!v.is_object() || v.size() != 3) fail(key, "must be null or {d_alpha_rad, d_beta_rad, d_gamma_rad}");
-        return analysis::OrientationErrors{number(at(v, "d_alpha_rad"), key + ".d_alpha_rad"),
-                                           number(at(v, "d_beta_rad"), key + ".d_beta_rad"),
-                                           number(at(v, "d_gamma_rad"), key + ".d_gamma_rad")};
-    }
+auto failing(std::string_view kind) {
+    return [kind = std::string(kind)](const std::string& key, const std::string& problem) {
+        throw ResultFormatError("result \"" + kind + "\"" + (key.empty() ? "" : ": \"" + key + "\"") + " " + problem);
+    };
+}
+using Fields = fileio::JsonFields<json, decltype(failing(""))>;
 
-  private:
-    std::string kind_;
-    json j_;
-};
+int count(const Fields& f, const char* key, int lo = 0) {
+    const auto v = f.count(key, 1'000'000'000);
+    if (v < lo) f.refuse(key, "must be an integer of at least " + std::to_string(lo));
+    return static_cast<int>(v);
+}
 
-TestKind test_kind(const Reader& r, const json& v) {
+std::optional<analysis::OrientationErrors> angles(const Fields& f, const char* key) {
+    const json& v = f.at(key);
+    if (v.is_null()) return std::nullopt;
+    if (!v.is_object() || v.size() != 3) f.refuse(key, "must be null or {d_alpha_rad, d_beta_rad, d_gamma_rad}");
+    const Fields a(v, f.path(key), f.fail());
+    return analysis::OrientationErrors{a.number("d_alpha_rad"), a.number("d_beta_rad"), a.number("d_gamma_rad")};
+}
+
+TestKind test_kind(const Fields& f) {
+    const json& v = f.at("kind");
     for (TestKind k : {TestKind::BothAxes, TestKind::SpindleBeta, TestKind::TableAlpha})
         if (v.is_string() && v.get<std::string>() == to_string(k)) return k;
-    r.fail("kind", "must be \"BothAxes\", \"SpindleBeta\" or \"TableAlpha\"");
+    f.refuse("kind", "must be \"BothAxes\", \"SpindleBeta\" or \"TableAlpha\"");
 }
 
 }  // namespace
@@ -95,27 +79,25 @@ std::string location_to_json(const LocationResult& r) {
 }
 
 LocationResult location_from_json(std::string_view text) {
-    const Reader rd(kSsmResultKind, text,
-                    {"test", "step", "datum_mm", "e_exact_mm", "e_linear_mm", "e_std_mm", "dV_mm", "condition_number",
-                     "n", "residual_rms_mm"});
-    const json& j = rd.root();
+    const json j = parse(kSsmResultKind, text);
+    const Fields f(j, "", failing(kSsmResultKind));
+    f.only({"test", "step", "datum_mm", "e_exact_mm", "e_linear_mm", "e_std_mm", "dV_mm", "condition_number", "n",
+            "residual_rms_mm"});
     LocationResult r;
-    r.test = rd.count(rd.at(j, "test"), "test");
-    r.step = rd.count(rd.at(j, "step"), "step", 1);
-    if (r.step > 2) rd.fail("step", "must be 1 or 2");
-    r.datum_mm = rd.vec3(rd.at(j, "datum_mm"), "datum_mm");
-    r.ssm.exact_mm = rd.vec3(rd.at(j, "e_exact_mm"), "e_exact_mm");
-    r.ssm.linear_mm = rd.vec3(rd.at(j, "e_linear_mm"), "e_linear_mm");
-    r.ssm.std_mm = rd.vec3(rd.at(j, "e_std_mm"), "e_std_mm");
-    for (int a = 0; a < 3; ++a)
-        if (r.ssm.std_mm[a] < 0) rd.fail("e_std_mm", "cannot be negative");
-    r.dV_mm = rd.vec3(rd.at(j, "dV_mm"), "dV_mm");
-    const json& cond = rd.at(j, "condition_number");
+    r.test = count(f, "test");
+    r.step = count(f, "step", 1);
+    if (r.step > 2) f.refuse("step", "must be 1 or 2");
+    r.datum_mm = f.vec3<analysis::Vec3>("datum_mm");
+    r.ssm.exact_mm = f.vec3<analysis::Vec3>("e_exact_mm");
+    r.ssm.linear_mm = f.vec3<analysis::Vec3>("e_linear_mm");
+    r.ssm.std_mm = f.vec3<analysis::Vec3>("e_std_mm");
+    if (r.ssm.std_mm.minCoeff() < 0) f.refuse("e_std_mm", "cannot be negative");
+    r.dV_mm = f.vec3<analysis::Vec3>("dV_mm");
+    // +∞ for a degenerate layout: null
     r.ssm.condition_number =
-        cond.is_null() ? std::numeric_limits<double>::infinity() : rd.number(cond, "condition_number");
-    r.ssm.n = static_cast<std::size_t>(rd.count(rd.at(j, "n"), "n"));
-    if (const auto it = j.find("residual_rms_mm"); it != j.end())
-        r.ssm.residual_rms_mm = rd.number(*it, "residual_rms_mm");
+        f.at("condition_number").is_null() ? std::numeric_limits<double>::infinity() : f.number("condition_number");
+    r.ssm.n = static_cast<std::size_t>(count(f, "n"));
+    if (f.has("residual_rms_mm")) r.ssm.residual_rms_mm = f.number("residual_rms_mm");
     return r;
 }
 
@@ -133,21 +115,18 @@ std::string test_to_json(const TestResult& r) {
 }
 
 TestResult test_from_json(std::string_view text) {
-    const Reader rd(kOrientationResultKind, text,
-                    {"test", "kind", "dV1_mm", "dV2_mm", "first_order", "exact", "std", "singular"});
-    const json& j = rd.root();
+    const json j = parse(kOrientationResultKind, text);
+    const Fields f(j, "", failing(kOrientationResultKind));
+    f.only({"test", "kind", "dV1_mm", "dV2_mm", "first_order", "exact", "std", "singular"});
     TestResult r;
-    r.test = rd.count(rd.at(j, "test"), "test");
-    r.kind = test_kind(rd, rd.at(j, "kind"));
-    r.dV1_mm = rd.vec3(rd.at(j, "dV1_mm"), "dV1_mm");
-    r.dV2_mm = rd.vec3(rd.at(j, "dV2_mm"), "dV2_mm");
-    r.orientation.first_order = rd.angles(rd.at(j, "first_order"), "first_order");
-    r.orientation.exact = rd.angles(rd.at(j, "exact"), "exact");
-    r.std_rad = rd.angles(rd.at(j, "std"), "std");
-    if (const auto it = j.find("singular"); it != j.end()) {
-        if (!it->is_string()) rd.fail("singular", "must be a string");
-        r.orientation.singular = it->get<std::string>();
-    }
+    r.test = count(f, "test");
+    r.kind = test_kind(f);
+    r.dV1_mm = f.vec3<analysis::Vec3>("dV1_mm");
+    r.dV2_mm = f.vec3<analysis::Vec3>("dV2_mm");
+    r.orientation.first_order = angles(f, "first_order");
+    r.orientation.exact = angles(f, "exact");
+    r.std_rad = angles(f, "std");
+    if (f.has("singular")) r.orientation.singular = f.text("singular");
     return r;
 }
 
@@ -159,10 +138,12 @@ std::string plan_to_json(const Plan& plan) {
 }
 
 Plan plan_from_json(std::string_view text) {
-    const Reader rd(kPlanResultKind, text, {"machine", "plan"});
+    const json j = parse(kPlanResultKind, text);
+    const Fields f(j, "", failing(kPlanResultKind));
+    f.only({"machine", "plan"});
     // The files' own readers check them (PlanError names what is wrong).
-    const MachineFile m = parse_machine_file(rd.at(rd.root(), "machine").dump());
-    return make_plan(m, parse_plan_file(rd.at(rd.root(), "plan").dump(), m.geometry.type));
+    const MachineFile m = parse_machine_file(f.at("machine").dump());
+    return make_plan(m, parse_plan_file(f.at("plan").dump(), m.geometry.type));
 }
 
 }  // namespace ballbar::acquisition

@@ -6,6 +6,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "ballbar/fileio/json_fields.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
 namespace ballbar::storage {
@@ -14,51 +15,17 @@ namespace {
 namespace ba = ballbar::analysis;
 using json = nlohmann::ordered_json;
 
-constexpr std::string_view kKeys[] = {"converged",
-                                      "iterations",
-                                      "message",
-                                      "readings",
-                                      "degrees_of_freedom",
-                                      "residual_rms_um",
-                                      "residual_sigma_um",
-                                      "noise_floor_um",
-                                      "uncertainty_from_noise_floor",
-                                      "initial_rms_um",
-                                      "estimates",
-                                      "correlation",
-                                      "correlation_names",
-                                      "model"};
-constexpr std::string_view kEstimateKeys[] = {"name",         "estimate",   "std", "sensitivity",
-                                              "independence", "observable", "unit"};
-
 [[noreturn]] void bad(const std::string& key, const std::string& what) {
-    throw FormatError("result \"identification\": \"" + key + "\" " + what);
+    throw FormatError("result \"identification\"" + (key.empty() ? "" : ": \"" + key + "\"") + " " + what);
 }
+using Fields = fileio::JsonFields<json, decltype(&bad)>;
 
-/// A number; null (what nlohmann writes for NaN and ±∞) reads as NaN where `nan_ok`.
-double number(const json& v, const std::string& key, bool nan_ok = false) {
-    if (nan_ok && v.is_null()) return std::numeric_limits<double>::quiet_NaN();
-    if (!v.is_number() || !std::isfinite(v.get<double>())) bad(key, "must be a finite number");
-    return v.get<double>();
+/// A number; null (what nlohmann writes for NaN and ±∞) reads as NaN.
+double number_or_nan(const Fields& f, const char* key) {
+    return f.at(key).is_null() ? std::numeric_limits<double>::quiet_NaN() : f.number(key);
 }
-int count(const json& v, const std::string& key) {
-    if (!v.is_number_integer() || v.get<std::int64_t>() < 0 || v.get<std::int64_t>() > 2'000'000'000)
-        bad(key, "must be a non-negative integer");
-    return v.get<int>();
-}
-bool boolean(const json& v, const std::string& key) {
-    if (!v.is_boolean()) bad(key, "must be true or false");
-    return v.get<bool>();
-}
-std::string text(const json& v, const std::string& key) {
-    if (!v.is_string()) bad(key, "must be a string");
-    return v.get<std::string>();
-}
-template <std::size_t N>
-void only(const json& j, const std::string_view (&keys)[N], const std::string& where) {
-    for (const auto& item : j.items())
-        if (std::find(std::begin(keys), std::end(keys), item.key()) == std::end(keys))
-            bad(where + item.key(), "is not a key it has");
+int count(const Fields& f, const char* key) {
+    return static_cast<int>(f.count(key));
 }
 
 }  // namespace
@@ -104,45 +71,45 @@ IdentificationRecord identification_from_json(std::string_view text_in) {
     } catch (const json::exception& e) {
         throw FormatError(std::string("result \"identification\" is not valid JSON: ") + e.what());
     }
-    if (!j.is_object()) throw FormatError("result \"identification\" is not a JSON object");
-    only(j, kKeys, "");
-    for (const char* key : {"converged", "residual_rms_um", "estimates"})
-        if (!j.contains(key)) bad(key, "is missing");
+    const Fields f(j, "", &bad);
+    f.only({"converged", "iterations", "message", "readings", "degrees_of_freedom", "residual_rms_um",
+            "residual_sigma_um", "noise_floor_um", "uncertainty_from_noise_floor", "initial_rms_um", "estimates",
+            "correlation", "correlation_names", "model"});
     IdentificationRecord r;
-    r.converged = boolean(j["converged"], "converged");
-    r.residual_rms_um = number(j["residual_rms_um"], "residual_rms_um");
-    if (j.contains("iterations")) r.iterations = count(j["iterations"], "iterations");
-    if (j.contains("message")) r.message = text(j["message"], "message");
-    if (j.contains("readings")) r.readings = count(j["readings"], "readings");
-    if (j.contains("degrees_of_freedom")) r.degrees_of_freedom = count(j["degrees_of_freedom"], "degrees_of_freedom");
-    if (j.contains("residual_sigma_um")) r.residual_sigma_um = number(j["residual_sigma_um"], "residual_sigma_um");
-    if (j.contains("initial_rms_um")) r.initial_rms_um = number(j["initial_rms_um"], "initial_rms_um");
-    if (j.contains("noise_floor_um")) r.noise_floor_um = number(j["noise_floor_um"], "noise_floor_um");
-    if (j.contains("uncertainty_from_noise_floor"))
-        r.uncertainty_from_noise_floor = boolean(j["uncertainty_from_noise_floor"], "uncertainty_from_noise_floor");
-    if (!j["estimates"].is_array()) bad("estimates", "must be an array");
+    r.converged = f.boolean("converged");
+    r.residual_rms_um = f.number("residual_rms_um");
+    (void)f.at("estimates");
+    if (f.has("iterations")) r.iterations = count(f, "iterations");
+    if (f.has("message")) r.message = f.text("message");
+    if (f.has("readings")) r.readings = count(f, "readings");
+    if (f.has("degrees_of_freedom")) r.degrees_of_freedom = count(f, "degrees_of_freedom");
+    if (f.has("residual_sigma_um")) r.residual_sigma_um = f.number("residual_sigma_um");
+    if (f.has("initial_rms_um")) r.initial_rms_um = f.number("initial_rms_um");
+    if (f.has("noise_floor_um")) r.noise_floor_um = f.number("noise_floor_um");
+    if (f.has("uncertainty_from_noise_floor"))
+        r.uncertainty_from_noise_floor = f.boolean("uncertainty_from_noise_floor");
+    if (!f.at("estimates").is_array()) bad("estimates", "must be an array");
     for (std::size_t i = 0; i < j["estimates"].size(); ++i) {
-        const json& e = j["estimates"][i];
-        const std::string at = "estimates[" + std::to_string(i) + "].";
-        if (!e.is_object()) bad(at.substr(0, at.size() - 1), "must be an object");
-        only(e, kEstimateKeys, at);
-        for (const char* key : {"name", "estimate", "std", "observable", "unit"})
-            if (!e.contains(key)) bad(at + key, "is missing");
+        const Fields e(j["estimates"][i], "estimates[" + std::to_string(i) + "]", &bad);
+        e.only({"name", "estimate", "std", "sensitivity", "independence", "observable", "unit"});
         IdentifiedEstimate x;
-        x.name = text(e["name"], at + "name");
-        x.estimate = number(e["estimate"], at + "estimate");
-        x.std = number(e["std"], at + "std", /*nan_ok=*/true);
-        if (e.contains("sensitivity")) x.sensitivity = number(e["sensitivity"], at + "sensitivity", true);
-        if (e.contains("independence")) x.independence = number(e["independence"], at + "independence", true);
-        x.observable = boolean(e["observable"], at + "observable");
-        x.unit = text(e["unit"], at + "unit");
+        x.name = e.text("name");
+        x.estimate = e.number("estimate");
+        x.std = number_or_nan(e, "std");
+        if (e.has("sensitivity")) x.sensitivity = number_or_nan(e, "sensitivity");
+        if (e.has("independence")) x.independence = number_or_nan(e, "independence");
+        x.observable = e.boolean("observable");
+        x.unit = e.text("unit");
         r.estimates.push_back(std::move(x));
     }
-    if (j.contains("correlation_names")) {
+    if (f.has("correlation_names")) {
         if (!j["correlation_names"].is_array()) bad("correlation_names", "must be an array of names");
-        for (const auto& n : j["correlation_names"]) r.correlation_names.push_back(text(n, "correlation_names"));
+        for (const auto& n : j["correlation_names"]) {
+            if (!n.is_string()) bad("correlation_names", "must be an array of names");
+            r.correlation_names.push_back(n.get<std::string>());
+        }
     }
-    if (j.contains("correlation")) {
+    if (f.has("correlation")) {
         const json& c = j["correlation"];
         if (!c.is_array() || c.size() != r.correlation_names.size())
             bad("correlation", "must be a square matrix over correlation_names");
@@ -150,10 +117,13 @@ IdentificationRecord identification_from_json(std::string_view text_in) {
             if (!row.is_array() || row.size() != r.correlation_names.size())
                 bad("correlation", "must be a square matrix over correlation_names");
             auto& out = r.correlation.emplace_back();
-            for (const auto& v : row) out.push_back(number(v, "correlation", /*nan_ok=*/true));
+            for (const auto& v : row) {
+                if (!v.is_null() && !v.is_number()) bad("correlation", "must hold numbers");
+                out.push_back(v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>());
+            }
         }
     }
-    if (j.contains("model")) {
+    if (f.has("model")) {
         try {
             r.model = model_from_json(j["model"].dump());
         } catch (const FormatError& e) {

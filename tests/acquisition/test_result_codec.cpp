@@ -77,21 +77,21 @@ TEST(ResultCodec, APayloadOfAnotherShapeIsRefusedNamingTheKey) {
     const struct {
         std::string text, says;
     } ssm_cases[] = {
-        {"[]", "is not a JSON object"},
+        {"[]", "must be a JSON object"},
         {"{" + ssm + R"(,"std_mm":[0,0,0]})", "\"std_mm\" is not a key it has"},
         {R"({"test":0,"step":1})", "\"datum_mm\" is missing"},
         {"{" + ssm.substr(0, ssm.find(R"("dV_mm")")) + R"("dV_mm":[1,2],"condition_number":1,"n":3})",
          "\"dV_mm\" must be an array of three numbers"},
         {R"({"test":0,"step":3,"datum_mm":[0,0,0]})", "\"step\" must be 1 or 2"},
-        {R"({"test":-1})", "\"test\" must be an integer"},
-        {"{" + ssm.substr(0, ssm.find(R"("n")")) + R"("n":2.5})", "\"n\" must be an integer"},
+        {R"({"test":-1})", "\"test\" must be a non-negative integer"},
+        {"{" + ssm.substr(0, ssm.find(R"("n")")) + R"("n":2.5})", "\"n\" must be a non-negative integer"},
     };
     for (const auto& c : ssm_cases) {
         try {
             (void)location_from_json(c.text);
             ADD_FAILURE() << "accepted " << c.text;
         } catch (const ResultFormatError& e) {
-            EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what() << " / wanted: " << c.says;
             EXPECT_NE(std::string(e.what()).find("result \"ssm\""), std::string::npos) << e.what();
         }
     }
