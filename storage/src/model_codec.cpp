@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/fileio/json_fields.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
 namespace ballbar::storage {
@@ -27,15 +28,16 @@ json vec_to(const analysis::Vec3& v) {
     return json::array({v.x(), v.y(), v.z()});
 }
 
-double finite(const json& v, const std::string& where) {
-    if (!v.is_number() || !std::isfinite(v.get<double>())) throw FormatError(where + ": must be a finite number");
-    return v.get<double>();
+[[noreturn]] void refuse(const std::string& key, const std::string& problem) {
+    throw FormatError(key + ": " + problem);
 }
+using Fields = fileio::JsonFields<json, decltype(&refuse)>;  // fileio/json_fields.hpp
 
-analysis::Vec3 vec_from(const json& v, const std::string& where) {
-    if (!v.is_array() || v.size() != 3) throw FormatError(where + ": must be an array of 3 numbers (mm)");
+analysis::Vec3 vec_from(const Fields& f, const json& v, const std::string& where) {
+    if (!v.is_array() || v.size() != 3) f.refuse(where, "must be an array of 3 numbers (mm)");
     analysis::Vec3 out;
-    for (std::size_t i = 0; i < 3; ++i) out[static_cast<int>(i)] = finite(v[i], where + "[" + std::to_string(i) + "]");
+    for (std::size_t i = 0; i < 3; ++i)
+        out[static_cast<int>(i)] = f.number_value(v[i], where + "[" + std::to_string(i) + "]");
     return out;
 }
 
@@ -98,6 +100,7 @@ ErrorModel model_from_json(std::string_view text) {
         throw FormatError(std::string("malformed JSON: ") + e.what());
     }
     if (!j.is_object()) throw FormatError("a model must be a JSON object");
+    const Fields f(j, "", &refuse);
     for (const auto& item : j.items())
         if (std::find(std::begin(kKeys), std::end(kKeys), item.key()) == std::end(kKeys))
             throw FormatError(item.key() + ": unknown key (" + known_keys() + ")");
@@ -117,7 +120,7 @@ ErrorModel model_from_json(std::string_view text) {
     for (const auto& item : j["params"].items()) {
         const std::string where = "params." + item.key();
         const analysis::Param p = param_from(item.key(), where);
-        const double v = finite(item.value(), where);
+        const double v = f.number_value(item.value(), where);
         if (const std::string why = analysis::limits::check_param(p, v); !why.empty())
             throw FormatError(where + " " + why);
         m.params.push_back({p, v, std::nullopt});
@@ -126,7 +129,7 @@ ErrorModel model_from_json(std::string_view text) {
         for (const auto& item : object_at(j, "std", "{\"X0C\": uncertainty, ...}").items()) {
             const std::string where = "std." + item.key();
             const analysis::Param p = param_from(item.key(), where);
-            const double v = finite(item.value(), where);
+            const double v = f.number_value(item.value(), where);
             if (v < 0) throw FormatError(where + ": an uncertainty cannot be negative");
             const auto it =
                 std::find_if(m.params.begin(), m.params.end(), [p](const ModelParam& q) { return q.param == p; });
@@ -145,7 +148,7 @@ ErrorModel model_from_json(std::string_view text) {
             const std::string where = "empirical." + item.key();
             const auto t = analysis::parse_empirical_term(item.key());
             if (!t) throw FormatError(where + ": unknown term");
-            m.empirical.push_back({*t, finite(item.value(), where), 0.0});
+            m.empirical.push_back({*t, f.number_value(item.value(), where), 0.0});
         }
     if (j.contains("sockets")) {
         if (!j["sockets"].is_array()) throw FormatError("\"sockets\" must be an array");
@@ -154,28 +157,17 @@ ErrorModel model_from_json(std::string_view text) {
             const std::string where = "sockets[" + std::to_string(i) + "]";
             if (!s.is_object() || !s.contains("nominal_mm") || !s.contains("offset_mm") || s.size() != 2)
                 throw FormatError(where + ": must be {\"nominal_mm\": [x, y, z], \"offset_mm\": [x, y, z]}");
-            m.sockets.push_back(
-                {vec_from(s["nominal_mm"], where + ".nominal_mm"), vec_from(s["offset_mm"], where + ".offset_mm")});
+            m.sockets.push_back({vec_from(f, s["nominal_mm"], where + ".nominal_mm"),
+                                 vec_from(f, s["offset_mm"], where + ".offset_mm")});
         }
     }
-    if (j.contains("residual_rms_um")) {
-        m.residual_rms_um = finite(j["residual_rms_um"], "residual_rms_um");
-        if (*m.residual_rms_um < 0) throw FormatError("residual_rms_um: cannot be negative");
+    if (f.has("residual_rms_um")) {
+        m.residual_rms_um = f.number("residual_rms_um");
+        if (*m.residual_rms_um < 0) f.refuse("residual_rms_um", "cannot be negative");
     }
-    if (j.contains("readings")) {
-        if (!j["readings"].is_number_integer() || j["readings"].get<std::int64_t>() < 0 ||
-            j["readings"].get<std::int64_t>() > 2147483647)
-            throw FormatError("readings: must be a count (a non-negative integer)");
-        m.readings = j["readings"].get<int>();
-    }
-    if (j.contains("converged")) {
-        if (!j["converged"].is_boolean()) throw FormatError("converged: must be true or false");
-        m.converged = j["converged"].get<bool>();
-    }
-    if (j.contains("added")) {
-        if (!j["added"].is_string()) throw FormatError("added: must be a string");
-        m.added = j["added"].get<std::string>();
-    }
+    if (f.has("readings")) m.readings = static_cast<int>(f.count("readings", 2147483647));
+    if (f.has("converged")) m.converged = f.boolean("converged");
+    if (f.has("added")) m.added = f.text("added");
     return m;
 }
 

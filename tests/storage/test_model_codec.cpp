@@ -95,7 +95,7 @@ TEST(ModelCodec, RefusesWhatTheFormatDoesNotAllowNamingTheKey) {
         {"{" + kMachine + "," + p + R"(,"unobservable":"A_zero"})", "\"unobservable\" must be an array"},
         {"{" + kMachine + "," + p + R"(,"empirical":{"C_wobble":1}})", "empirical.C_wobble: unknown term"},
         {"{" + kMachine + "," + p + R"(,"sockets":[{"nominal_mm":[1,2]}]})", "sockets[0]"},
-        {"{" + kMachine + "," + p + R"(,"readings":6.5})", "readings: must be a count"},
+        {"{" + kMachine + "," + p + R"(,"readings":6.5})", "readings: must be a non-negative integer"},
         {"{" + kMachine + "," + p + R"(,"converged":1})", "converged: must be true or false"},
         {R"({"machine":{"type":"XYZ"},)" + p + "}", "machine.type"},
     };
