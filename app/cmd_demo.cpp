@@ -133,6 +133,9 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     if (!o.plan.empty()) {
         try {
             demo.plan = acq::parse_plan_file(read_file(o.plan, "plan file"), *type);
+            // Planned (travel, conditioning, rotations) before anything is stored: a refused plan leaves
+            // no database behind.
+            (void)acq::make_plan(acq::seed_machine(*type), *demo.plan);
         } catch (const acq::PlanError& e) {
             throw Error(ErrorCategory::bad_input, o.plan + ": " + e.what());
         }

@@ -87,7 +87,7 @@ std::string resolve_db_path(const Globals& globals);
 
 /// The database path for a command that only reads sessions from it: like resolve_db_path, but a
 /// database that does not exist is the user's mistake (a mistyped --db), never created.
-/// Throws Error (not found) naming the path.
+/// Throws Error (bad input) naming the path.
 std::string existing_db_path(const Globals& globals);
 
 /// A reader found its database damaged (storage::Store::damage(), not empty): says so on stderr at once,
@@ -98,7 +98,8 @@ void note_database_damage(const std::string& damage);
 using workflow::looks_like_session_key;  ///< an id or a uuid prefix (workflow/session_key.hpp)
 
 /// The whole of a JSON input file, at most fileio::kMaxJsonBytes (app/files.cpp). Throws
-/// Error (bad input) naming `what` ("machine file") when it cannot be read or is refused.
+/// Error naming `what`: bad input when it cannot be read or is refused, failed for an I/O error ("machine file") when
+/// it cannot be read or is refused.
 std::string read_file(const std::string& path, const char* what);
 
 }  // namespace ballbar::app

@@ -100,10 +100,15 @@ void check_same_machine(const MachineGeometry& a, const MachineGeometry& b) {
     const std::pair<const char*, Vec3 MachineGeometry::*> keys[] = {{"tool_ball_mm", &MachineGeometry::tool_ball_mm},
                                                                     {"a_pivot_mm", &MachineGeometry::a_pivot_mm},
                                                                     {"c_offset_mm", &MachineGeometry::c_offset_mm}};
-    for (const auto& [key, member] : keys)
+    for (const auto& [key, member] : keys) {
+        // Only what the type's kinematics use (machine_json.hpp's rule): the rest is not the machine's.
+        const std::string_view k = key;
+        if (k == "a_pivot_mm" && a.type == MachineType::RRTTT) continue;
+        if (k == "c_offset_mm" && a.type != MachineType::TTTRR) continue;
         if (((a.*member) - (b.*member)).cwiseAbs().maxCoeff() > kSame_mm)
             throw AnalysisError(std::string("cannot merge readings of two machines: their ") + key + " differ (" +
                                 format_vec(a.*member) + " and " + format_vec(b.*member) + ")");
+    }
 }
 
 }  // namespace

@@ -67,24 +67,19 @@ std::string model_to_json(const ErrorModel& m) {
     j["machine"] = json::parse(machine_to_json(m.machine));
     j["params"] = json::object();
     for (const ModelParam& p : m.params) j["params"][std::string(analysis::param_info(p.param).name)] = p.value;
-    if (std::any_of(m.params.begin(), m.params.end(), [](const ModelParam& p) { return p.std.has_value(); })) {
-        j["std"] = json::object();
-        for (const ModelParam& p : m.params)
-            if (p.std) j["std"][std::string(analysis::param_info(p.param).name)] = *p.std;
-    }
-    if (!m.unobservable.empty()) {
-        j["unobservable"] = json::array();
-        for (analysis::Param p : m.unobservable) j["unobservable"].push_back(std::string(analysis::param_info(p).name));
-    }
+    // std, unobservable and sockets are written even when empty: a script reads them without asking first.
+    j["std"] = json::object();
+    for (const ModelParam& p : m.params)
+        if (p.std) j["std"][std::string(analysis::param_info(p.param).name)] = *p.std;
+    j["unobservable"] = json::array();
+    for (analysis::Param p : m.unobservable) j["unobservable"].push_back(std::string(analysis::param_info(p).name));
     if (!m.empirical.empty()) {
         j["empirical"] = json::object();
         for (const analysis::LearnedTerm& t : m.empirical) j["empirical"][t.term.name()] = t.value;
     }
-    if (!m.sockets.empty()) {
-        j["sockets"] = json::array();
-        for (const ModelSocket& s : m.sockets)
-            j["sockets"].push_back({{"nominal_mm", vec_to(s.nominal_mm)}, {"offset_mm", vec_to(s.offset_mm)}});
-    }
+    j["sockets"] = json::array();
+    for (const ModelSocket& s : m.sockets)
+        j["sockets"].push_back({{"nominal_mm", vec_to(s.nominal_mm)}, {"offset_mm", vec_to(s.offset_mm)}});
     if (m.residual_rms_um) j["residual_rms_um"] = *m.residual_rms_um;
     if (m.readings) j["readings"] = *m.readings;
     if (m.converged) j["converged"] = *m.converged;

@@ -46,6 +46,15 @@ TEST(CliLeavesNothing, RefusedCommandsCreateNoDatabase) {
     const CliRun session = run(dir, "circle analyze 12");
     EXPECT_EQ(session.code, 2) << session.err;
     EXPECT_FALSE(fs::exists(dir.file("test.db"))) << "circle analyze SESSION without a database";
+    // A plan file that parses but cannot be measured (a socket far outside the travel) is planned before
+    // the demo opens its database (review of issue 25's demo use case).
+    std::ofstream(dir.path / "far.plan.json")
+        << R"({"format": "ballbar-plan/1", "bar_length_mm": 100, "layout": "cube-corner", "dwell_s": 1.0,)"
+        << R"( "tests": [{"socket_mm": [90000, 0, 0], "rotation_deg": {"A": 10, "C": 30}}]})";
+    const CliRun demo = run(dir, "demo --plan " + dir.file("far.plan.json"));
+    EXPECT_EQ(demo.code, 2) << demo.err;
+    EXPECT_NE(demo.err.find("far.plan.json: "), std::string::npos) << demo.err;
+    EXPECT_FALSE(fs::exists(dir.file("test.db"))) << "demo --plan PLAN-THAT-CANNOT-BE-MEASURED";
 }
 
 TEST(CliLeavesNothing, TwoOutputsNamingOneFileAreRefusedBeforeEitherIsWritten) {

@@ -49,7 +49,11 @@ PreparedSession resume_ssm_session(storage::Store& store, std::string_view key) 
     } catch (const acq::PlanError& e) {
         throw Error(ErrorCategory::bad_input, e.what());
     }
-    s.done = load_points(store, s.id, s.plan);
+    try {
+        s.done = load_points(store, s.id, s.plan);
+    } catch (const acq::PlanError& e) {  // stored points the stored plan has no place for: the data's fault
+        throw Error(ErrorCategory::failed, "session " + std::to_string(s.id) + ": " + e.what());
+    }
     try {
         store.resume_session(s.id);
     } catch (const storage::StorageError& e) {
@@ -86,7 +90,11 @@ acq::SessionSummary measure_ssm(storage::Store& store, const PreparedSession& pr
     const auto gauge =
         o.open_transport ? nullptr : make_gauge_source(uri, plan.spec.bar_length_mm);  // (gauge_source.hpp)
     acq::Session session(plan, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
-    session.restore(prepared.done);
+    try {
+        session.restore(prepared.done);
+    } catch (const acq::PlanError& e) {  // as in resume_ssm_session: the stored data's fault
+        throw Error(ErrorCategory::failed, "session " + std::to_string(id) + ": " + e.what());
+    }
     const std::uint64_t first_seq = store.next_seq(id);  // this run's samples (a resume continues after)
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);

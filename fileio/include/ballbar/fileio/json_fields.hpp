@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
-// The one helper of every strict reader of a JSON document (the stored model, the procedure's results,
-// identify's result, the offsets table, the trace header, the emulator configuration): each field is
-// checked for its type and range and an unknown key is refused, and every error names the key. A reader
+// The helper of the strict readers of JSON documents: each field is checked for its type and range, an
+// unknown key is refused, and every error names the key. The stored model, the procedure's results and
+// identify's result read through it; the offsets table, the trace header, the emulator configuration,
+// the machine and plan files and `solve` still have their own small checks (issue 25, item 3). A reader
 // gives its own `fail`, which throws its own error type with its own prefix; the checks are these.
 // Works on any nlohmann::basic_json (json, ordered_json).
 #pragma once

@@ -45,7 +45,8 @@ struct ErrorModel {
     analysis::ErrorParams values() const;
 };
 
-/// The model as a JSON object, "format" first; doubles round-trip exactly.
+/// The model as a JSON object, "format" first; doubles round-trip exactly. "std", "unobservable" and
+/// "sockets" are always written (empty when the model has none).
 std::string model_to_json(const ErrorModel& model);
 
 /// Reads a model strictly: unknown keys, unknown parameters or terms, values that are not finite or
