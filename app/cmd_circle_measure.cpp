@@ -60,12 +60,7 @@ class CircleStoreSink : public acq::CircularSink {
     /// The instrument identified: its length is the samples' reference; it is the session's instrument.
     void identified(const device::InstrumentInfo& info) {
         reference_mm_ = info.calibrated_length_mm;
-        storage::Instrument inst;
-        inst.model = info.model;
-        inst.serial = info.serial;
-        inst.firmware = info.firmware;
-        inst.calibrated_length_mm = info.calibrated_length_mm;
-        inst.calibration_date = info.calibration_date;
+        const storage::Instrument inst = workflow::stored_instrument(info);
         instrument_ = inst;
         if (id_) store_.set_instrument(*id_, inst);
     }

@@ -11,21 +11,6 @@ namespace ballbar::workflow {
 
 namespace acq = ballbar::acquisition;
 
-namespace {
-
-/// The identity the instrument reported, stored with the session (sessions show, the report).
-void record_instrument(storage::Store& store, std::int64_t id, const device::InstrumentInfo& info) {
-    storage::Instrument in;
-    in.model = info.model;
-    in.serial = info.serial;
-    in.firmware = info.firmware;
-    in.calibrated_length_mm = info.calibrated_length_mm;
-    in.calibration_date = info.calibration_date;
-    store.set_instrument(id, in);
-}
-
-}  // namespace
-
 PreparedSession new_ssm_session(storage::Store& store, const acq::Plan& plan, std::string_view device_uri) {
     PreparedSession s;
     s.plan = plan;
@@ -79,7 +64,7 @@ acq::SessionSummary measure_ssm(storage::Store& store, const PreparedSession& pr
         }
     });
     source.on_identified = [&store, id, &plan, &o](const device::InstrumentInfo& info) {
-        record_instrument(store, id, info);
+        store.set_instrument(id, stored_instrument(info));  // sessions show, the report
         const std::string mismatch = acq::bar_length_mismatch(plan.spec.bar_length_mm, info.calibrated_length_mm,
                                                               plan.spec.capture.tolerance_mm, o.plan_file);
         if (!mismatch.empty()) throw acq::InstrumentUnfit(mismatch);

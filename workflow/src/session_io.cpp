@@ -232,6 +232,16 @@ void StoreSink::finish(const acq::SessionSummary& summary) {
     }
 }
 
+storage::Instrument stored_instrument(const device::InstrumentInfo& info) {
+    storage::Instrument in;
+    in.model = info.model;
+    in.serial = info.serial;
+    in.firmware = info.firmware;
+    in.calibrated_length_mm = info.calibrated_length_mm;
+    in.calibration_date = info.calibration_date;
+    return in;
+}
+
 void store_plan(storage::Store& store, std::int64_t session_id, const acq::Plan& plan) {
     store.add_result(session_id, std::string(acq::kPlanResultKind), acq::plan_to_json(plan), std::nullopt,
                      "ballbar acquisition/1");

@@ -84,6 +84,9 @@ class StoreSink : public acquisition::SessionSink {
     std::uint64_t last_source_ = 0, last_stored_ = 0;
 };
 
+/// The identity an instrument reported, as the session stores it (sessions show, the report).
+storage::Instrument stored_instrument(const device::InstrumentInfo& info);
+
 /// Stores the plan with a new session (for --resume) and reads it back.
 void store_plan(storage::Store& store, std::int64_t session_id, const acquisition::Plan& plan);
 acquisition::Plan load_plan(storage::Store& store, std::int64_t session_id);
