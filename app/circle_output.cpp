@@ -12,7 +12,7 @@ namespace ballbar::app {
 namespace {
 
 namespace circ = analysis::circular;
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 
 std::string fmt(double v, int decimals = 2) {
     char buf[64];
@@ -45,9 +45,9 @@ std::array<AxisFigures, 2> axis_figures(const circ::CircularResult& r) {
 
 }  // namespace
 
-json circle_result_json(const circ::CircularResult& r, const storage::TraceFile& trace,
+ojson circle_result_json(const circ::CircularResult& r, const storage::TraceFile& trace,
                         std::optional<double> tolerance_um) {
-    return json::parse(storage::circular_result_json(r, trace, tolerance_um));  // the stored payload's format
+    return ojson::parse(storage::circular_result_json(r, trace, tolerance_um));  // the stored payload's format
 }
 
 void print_circle_result(std::ostream& os, const circ::CircularResult& r, const storage::TraceFile& trace,
@@ -95,10 +95,10 @@ void print_circle_result(std::ostream& os, const circ::CircularResult& r, const 
     os << "residual RMS after the diagnosis: " << fmt(r.residual_rms_um, 3) << " um\n";
 }
 
-json volumetric_json(const circ::VolumetricResult& v) {
-    json j = json::object();
+ojson volumetric_json(const circ::VolumetricResult& v) {
+    ojson j = ojson::object();
     for (const auto& f : v.figures)
-        j[f.key] = f.known ? json{{"value", f.value}, {"std_uncertainty", f.std_uncertainty}} : json(nullptr);
+        j[f.key] = f.known ? ojson{{"value", f.value}, {"std_uncertainty", f.std_uncertainty}} : ojson(nullptr);
     return j;
 }
 
@@ -113,14 +113,14 @@ void print_volumetric(std::ostream& os, const circ::VolumetricResult& v) {
     }
 }
 
-json controller_json(const circ::CircularResult& r, const std::string& controller) {
-    json j = {{"controller", controller}};
-    json axes = json::object();
+ojson controller_json(const circ::CircularResult& r, const std::string& controller) {
+    ojson j = {{"controller", controller}};
+    ojson axes = ojson::object();
     // grblHAL: axis settings are numbered 100 + 10·kind + axis (X 0, Y 1, Z 2); kind 0 steps/mm,
     // kind 6 backlash (mm, only in a build with ENABLE_BACKLASH_COMPENSATION).
     const char* smoothie_actuator[3] = {"alpha", "beta", "gamma"};
     for (const auto& a : axis_figures(r)) {
-        json e = json::object();
+        ojson e = ojson::object();
         const std::string axis(1, static_cast<char>(a.axis - 'a' + 'A'));
         const std::string index = std::to_string(a.index);
         if (a.backlash_um) {
@@ -161,7 +161,7 @@ json controller_json(const circ::CircularResult& r, const std::string& controlle
 }
 
 void print_controller(std::ostream& os, const circ::CircularResult& r, const std::string& controller) {
-    const json j = controller_json(r, controller);
+    const ojson j = controller_json(r, controller);
     os << controller << " settings from this test (backlash: the lost motion measured, added at each reversal):\n";
     for (const auto& [axis, e] : j["axes"].items()) {
         if (e.contains("setting")) os << "  " << e["setting"].get<std::string>() << "   ; " << axis << " backlash\n";

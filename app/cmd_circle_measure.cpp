@@ -37,7 +37,7 @@ namespace {
 
 namespace acq = ballbar::acquisition;
 namespace circ = ballbar::analysis::circular;
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 
 // ---- storage ----------------------------------------------------------------------------------------
 
@@ -92,14 +92,14 @@ class CircleStoreSink : public acq::CircularSink {
     void on_attempt(const acq::CircularAttempt& a) override {
         ensure();
         writer_->flush();
-        json runs = json::array();
+        ojson runs = ojson::array();
         for (const auto& r : a.runs)
             runs.push_back({{"direction", circ::direction_name(r.direction)},
                             {"feed_in_end_s", r.feed_in_end_s},
                             {"servo_lag_ms", r.lag_s * 1e3},
                             {"first_seq", stored(r.first_seq)},
                             {"last_seq", stored(r.last_seq)}});
-        json j = {{"attempt", a.attempt},
+        ojson j = {{"attempt", a.attempt},
                   {"good", a.good},
                   {"why", a.why},
                   {"reference_length_mm", reference_mm_},
@@ -163,12 +163,12 @@ std::int64_t create_circular_session(storage::Store& store, const circ::TestSpec
     ns.operator_name = operator_name;
     ns.procedure = "circular";
     ns.notes = notes;
-    const json meta = {{"format", "ballbar-trace/1"},
-                       {"test", json::parse(storage::test_json(test))},
+    const ojson meta = {{"format", "ballbar-trace/1"},
+                       {"test", ojson::parse(storage::test_json(test))},
                        {"reference_length_mm", test.radius_mm},
                        {"has_bar_temp", true},
                        {"part_program", {{"dialect", analysis::to_string(dialect)}, {"dwell_s", dwell_s}}},
-                       {"extra", json::object()}};
+                       {"extra", ojson::object()}};
     ns.metadata_json = meta.dump();
     const std::int64_t id = store.create_session(ns);
     store.start_session(id);
@@ -195,7 +195,7 @@ class CircleOperator : public acq::Operator {
     bool confirm(std::string_view what, std::string_view prompt) override {
         end_line();
         if (mode_ == Mode::Json || mode_ == Mode::JsonScripted) {
-            json j = {{"event", "question"}, {"what", what}, {"prompt", prompt}, {"options", {"yes", "no"}}};
+            ojson j = {{"event", "question"}, {"what", what}, {"prompt", prompt}, {"options", {"yes", "no"}}};
             bool yes = true;
             if (mode_ == Mode::Json) {
                 emit(j);
@@ -277,7 +277,7 @@ class CircleOperator : public acq::Operator {
     }
 
   private:
-    void emit(const json& j) { out_ << j.dump() << std::endl; }
+    void emit(const ojson& j) { out_ << j.dump() << std::endl; }
     void end_line() {
         if (line_) out_ << "\n";
         line_ = false;
@@ -295,7 +295,7 @@ class CircleOperator : public acq::Operator {
 
 /// The stored session's trace analysed as `circle analyze SESSION` does, the result stored with it.
 std::pair<circ::CircularResult, storage::TraceFile> analyze_stored(storage::Store& store, std::int64_t id,
-                                                                   json* result_json) {
+                                                                   ojson* result_json) {
     storage::TraceFile trace = storage::load_trace(store, id);
     circ::CircularResult r;
     try {
@@ -303,7 +303,7 @@ std::pair<circ::CircularResult, storage::TraceFile> analyze_stored(storage::Stor
     } catch (const circ::CircularError& e) {
         throw Error(ErrorCategory::failed, "session " + std::to_string(id) + ": the stored trace: " + e.what());
     }
-    json j = circle_result_json(r, trace, std::nullopt);
+    ojson j = circle_result_json(r, trace, std::nullopt);
     store.add_result(id, "circular", j.dump(), std::nullopt, "ballbar circular/1");
     j["session"] = id;
     if (result_json) *result_json = j;
@@ -383,7 +383,7 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
             std::cout << "Session " << id << " is " << storage::to_string(before.state)
                       << (before.reason.empty() ? "" : ": " + before.reason) << std::endl;
             test = storage::load_trace(store, id).test;
-            const json meta = json::parse(before.metadata_json.empty() ? "{}" : before.metadata_json);
+            const ojson meta = ojson::parse(before.metadata_json.empty() ? "{}" : before.metadata_json);
             if (meta.contains("part_program")) {
                 dialect = analysis::parse_nc_dialect(meta["part_program"].value("dialect", "fanuc"));
                 dwell_s = meta["part_program"].value("dwell_s", dwell_s);
@@ -468,10 +468,10 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
         sum, sink.id(),
         "ballbar circle measure --resume " + (sink.id() ? std::to_string(*sink.id()) : "") + " --device " + o.device);
     const std::int64_t id = *sink.id();
-    json j;
+    ojson j;
     const auto [result, trace] = analyze_stored(store, id, &j);
     if (o.json) {
-        std::cout << json{{"event", "done"},
+        std::cout << ojson{{"event", "done"},
                           {"session", id},
                           {"samples", sum.samples},
                           {"attempts", sum.attempts},
@@ -578,18 +578,18 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     emulator.halt();
     outcome(sum, id, "ballbar demo --test circular (a demo session is not resumed)");
 
-    json stored;
+    ojson stored;
     const auto [result, trace] = analyze_stored(store, id, &stored);
     const auto checks =
         device::compare_with_truth(result, emulator.emulator().continuous()->truth(test.plane, test.radius_mm));
     bool pass = true;
-    json diags = json::array();
+    ojson diags = ojson::array();
     for (const auto& c : checks) {
         pass = pass && c.pass;
         diags.push_back({{"key", c.key},
                          {"unit", circ::diagnostic_unit(c.diag)},
-                         {"measured", c.measured ? json(*c.measured) : json(nullptr)},
-                         {"std_uncertainty", c.measured ? json(c.std_uncertainty) : json(nullptr)},
+                         {"measured", c.measured ? ojson(*c.measured) : ojson(nullptr)},
+                         {"std_uncertainty", c.measured ? ojson(c.std_uncertainty) : ojson(nullptr)},
                          {"truth", c.truth},
                          {"allowed_error", c.allowed},
                          {"injected", c.injected},
@@ -597,7 +597,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
                          {"note", c.note}});
     }
     const auto& ec = emulator.emulator().counters();
-    json out = {{"session", id},
+    ojson out = {{"session", id},
                 {"plane", circ::plane_name(test.plane)},
                 {"radius_mm", test.radius_mm},
                 {"feed_mm_min", test.feed_mm_min},
@@ -610,7 +610,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
                 {"duplicates_dropped", sum.duplicates_dropped},
                 {"dropped_frames", ec.dropped_frames},
                 {"replayed_frames", ec.replayed_frames},
-                {"circularity_um", json::array()},
+                {"circularity_um", ojson::array()},
                 {"bidirectional_circularity_um", stored["bidirectional_circularity_um"]},
                 {"diagnostics", diags},
                 {"pass", pass}};

@@ -39,7 +39,7 @@ namespace {
 
 namespace acq = ballbar::acquisition;
 namespace ba = ballbar::analysis;
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 
 struct DemoOptions {
     std::string machine = "TTTRR";
@@ -68,9 +68,9 @@ device::FaultConfig parse_faults(const std::string& spec) {
     }
 }
 
-json angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType type, acq::TestKind kind) {
+ojson angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType type, acq::TestKind kind) {
     if (!e) return nullptr;
-    json j = json::object();
+    ojson j = ojson::object();
     const ba::MeasuredAngles angles = acq::measured_angles(type, kind);
     if (angles.alpha) j["d_alpha"] = e->d_alpha_rad;
     if (angles.beta) j["d_beta"] = e->d_beta_rad;
@@ -80,7 +80,7 @@ json angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType 
 
 /// `angles` in arcseconds ("d_alpha -46.66\""), each with ± its standard uncertainty from `std` when
 /// given, and flagged (figures.hpp) when more than 5σ from `truth` when given.
-std::string arcsec(const json& angles, const json& std = nullptr, const json& truth = nullptr) {
+std::string arcsec(const ojson& angles, const ojson& std = nullptr, const ojson& truth = nullptr) {
     std::ostringstream os;
     os.setf(std::ios::fixed);
     os.precision(2);
@@ -99,7 +99,7 @@ std::string arcsec(const json& angles, const json& std = nullptr, const json& tr
 }
 
 /// The largest |measured − true| / std over a location's components, or 0 without uncertainties.
-double location_sigma(const json& l) {
+double location_sigma(const ojson& l) {
     double worst = 0;
     for (std::size_t a = 0; a < 3; ++a) {
         const double s = l["std_mm"][a].get<double>();
@@ -185,11 +185,11 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     const workflow::TruthCheck& tc = run.check;
 
     // Compare with the truth.
-    json out;
+    ojson out;
     out["session"] = id;
     out["machine"] = o.machine;
-    out["locations"] = json::array();
-    out["orientation"] = json::array();
+    out["locations"] = ojson::array();
+    out["orientation"] = ojson::array();
     for (const auto& [l, tr] : run.locations)
         out["locations"].push_back({{"test", l.test + 1},
                                     {"step", l.step},
@@ -229,7 +229,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         std::ostringstream ss;
         code = run_compensation_demo(co, ss, o.json, &cr);
         if (o.json) {
-            out["compensation"] = json::parse(ss.str());
+            out["compensation"] = ojson::parse(ss.str());
             // Issue 6's shape at the top level too: improvement, residual_um, identified (and rms_before_um).
             for (const char* key : {"improvement", "rms_before_um", "residual_um", "identified"})
                 out[key] = out["compensation"][key];
@@ -239,12 +239,12 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         // Stored with the demo session, so its report shows the before/after (report/ reads kind
         // "compensation") -- only with a TTTRR session: the proof runs on an emulated TTTRR machine.
         if (*type == ba::MachineType::TTTRR) {
-            json stored;
+            ojson stored;
             stored["metric"] = "RMS tool-ball error over a " + std::to_string(cr.path_blocks) +
                                "-block test path, before and after " + (cr.exact ? "exact" : "first-order") +
                                " compensation (compensation demo: its own emulated TTTRR machine, seed " +
                                std::to_string(o.seed) + ")";
-            stored["axes"] = json::array();
+            stored["axes"] = ojson::array();
             for (int a = 0; a < 3; ++a)
                 stored["axes"].push_back({{"axis", std::string(1, "XYZ"[a])},
                                           {"unit", "µm"},

@@ -32,7 +32,7 @@ namespace ballbar::app {
 namespace {
 
 namespace ba = ballbar::analysis;
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 
 struct DiscoverOptions {
     std::vector<std::string> inputs;
@@ -51,8 +51,8 @@ std::vector<std::string> param_names(const std::vector<ba::Param>& params) {
 }
 
 /// The JSON shape (docs/discovery.md).
-json result_json(const ba::DiscoveryResult& r) {
-    json steps = json::array();
+ojson result_json(const ba::DiscoveryResult& r) {
+    ojson steps = ojson::array();
     for (const ba::DiscoveryStep& st : r.steps)
         steps.push_back({{"effect", std::string(st.effect->id)},
                          {"iso", std::string(st.effect->iso)},
@@ -72,7 +72,7 @@ json result_json(const ba::DiscoveryResult& r) {
                 "no longer passes given the learned terms (F-test, Bonferroni over the model's "
                 "library effects)";
     for (const ba::EmpiricalStep& st : r.learned) {
-        json terms = json::object(), stderrs = json::object(), units = json::object();
+        ojson terms = ojson::object(), stderrs = ojson::object(), units = ojson::object();
         for (const ba::LearnedTerm& t : st.terms) {
             terms[t.term.name()] = t.value;
             stderrs[t.term.name()] = t.std_error;
@@ -94,7 +94,7 @@ json result_json(const ba::DiscoveryResult& r) {
                          {"explained_by", st.variable}});
     }
     auto verdict = [](const ba::NoiseVerdict& v) {
-        json j{{"result", v.text}, {"rms_um", v.rms_mm * 1e3}};
+        ojson j{{"result", v.text}, {"rms_um", v.rms_mm * 1e3}};
         if (v.floor_known) {
             j["ratio"] = v.ratio;
             j["statistic"] = "chi-square";
@@ -105,13 +105,13 @@ json result_json(const ba::DiscoveryResult& r) {
         }
         return j;
     };
-    json out{{"base_model", param_names(r.base_model)},
+    ojson out{{"base_model", param_names(r.base_model)},
              {"rms_initial_um", r.rms_initial_mm * 1e3},
              {"steps", steps},
              {"rms_final_um", r.rms_final_mm * 1e3},
              {"confounded", r.confounded},
              {"unidentifiable", r.unidentifiable},
-             {"noise_floor_um", r.noise_floor.known() ? json(r.noise_floor.sigma_mm * 1e3) : json(nullptr)},
+             {"noise_floor_um", r.noise_floor.known() ? ojson(r.noise_floor.sigma_mm * 1e3) : ojson(nullptr)},
              {"noise_source", r.noise_floor.source},
              {"noise_detail", r.noise_floor.detail},
              {"verdict_before_search", verdict(r.verdict_library)},
@@ -121,14 +121,14 @@ json result_json(const ba::DiscoveryResult& r) {
 }
 
 /// The learned terms as the stored model holds them ({"C_angular_h1_cos": value, ...}).
-json empirical_json(std::span<const ba::LearnedTerm> terms) {
-    json e = json::object();
+ojson empirical_json(std::span<const ba::LearnedTerm> terms) {
+    ojson e = ojson::object();
     for (const ba::LearnedTerm& t : terms) e[t.term.name()] = t.value;
     return e;
 }
 
-json params_json(const std::vector<ba::Param>& model, const ba::ErrorParams& values) {
-    json p = json::object();
+ojson params_json(const std::vector<ba::Param>& model, const ba::ErrorParams& values) {
+    ojson p = ojson::object();
     for (ba::Param q : model) p[std::string(ba::param_info(q).name)] = values[q];
     return p;
 }
@@ -155,9 +155,9 @@ std::string x_unit(const ba::EmpiricalStep& st) {
 }
 
 /// What the stored result holds beyond the printed JSON: the criterion and the residual analysis.
-json details_json(const ba::DiscoveryResult& r, const std::vector<std::string>& inputs) {
+ojson details_json(const ba::DiscoveryResult& r, const std::vector<std::string>& inputs) {
     auto trends = [&r](const ba::ResidualAnalysis& a) {
-        json t = json::array();
+        ojson t = ojson::array();
         for (const auto& v : a.trends)
             t.push_back({{"variable", std::string(ba::to_string(v.variable, r.type))},
                          {"r2", v.r2},
@@ -174,14 +174,14 @@ json details_json(const ba::DiscoveryResult& r, const std::vector<std::string>& 
         for (double m : mm) out.push_back(m * 1e3);
         return out;
     };
-    json step_trends = json::array();  // each step's own before/after, against its variable
+    ojson step_trends = ojson::array();  // each step's own before/after, against its variable
     for (const ba::DiscoveryStep& st : r.steps)
         step_trends.push_back({{"variable", std::string(ba::to_string(st.explained_by, r.type))},
                                {"bin_centre", st.trend_before.bin_centre},
                                {"before_um", um(st.trend_before.bin_mean_mm)},
                                {"after_um", um(st.trend_after.bin_mean_mm)}});
     for (const ba::EmpiricalStep& st : r.learned) {
-        json families = json::array();
+        ojson families = ojson::array();
         for (const ba::FamilyScore& f : st.families)
             families.push_back({{"family", f.family},
                                 {"variable", f.variable},
@@ -232,7 +232,7 @@ void store_result(storage::Store& store, const Inputs& in, const ba::DiscoveryRe
         rec = store.save_model(name, stored_model(machine, r.final_model, r.final_fit.model, learned, st.family),
                                in.sessions, rec.id, note);
     }
-    json payload = result_json(r);
+    ojson payload = result_json(r);
     payload["details"] = details_json(r, in.names);
     payload["model"] = {{"name", name}, {"id", rec.id}, {"version", rec.version}};
     for (std::int64_t s : in.sessions)

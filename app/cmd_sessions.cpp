@@ -223,8 +223,8 @@ int run(const SessionsOptions& o, const Globals& globals, bool show) {
     } catch (const storage::StorageError& e) {
         throw as_error(e);
     }
-    const bool json = show ? o.show_json : o.json;
-    std::cout << (json ? text.str() : printable(text.str(), true));
+    const bool as_json = show ? o.show_json : o.json;
+    std::cout << (as_json ? text.str() : printable(text.str(), true));
     return code;
 }
 

@@ -29,7 +29,7 @@ namespace {
 namespace acq = ballbar::acquisition;
 namespace ba = ballbar::analysis;
 namespace gg = ballbar::device::gauge;
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 
 /// Answers yes; moves the bar into the calibrator for the zero and back onto the machine for the
 /// set-up; runs the NC program on the simulated machine.
@@ -61,8 +61,8 @@ class GaugeDemoOperator : public acq::ScriptedOperator {
     gg::GaugeEmulator& emu_;
 };
 
-json vec3(const ba::Vec3& v) {
-    return json::array({v.x(), v.y(), v.z()});
+ojson vec3(const ba::Vec3& v) {
+    return ojson::array({v.x(), v.y(), v.z()});
 }
 
 }  // namespace
@@ -148,12 +148,12 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
                                                sum.reason);  // as stored (interrupted, aborted, failed)
 
     const auto truth = acq::true_values(plan, setup.errors);
-    json out;
+    ojson out;
     out["session"] = id;
     out["machine"] = o.machine;
-    out["instrument"] = json::parse(source.instrument_json());
-    out["locations"] = json::array();
-    out["orientation"] = json::array();
+    out["instrument"] = ojson::parse(source.instrument_json());
+    out["locations"] = ojson::array();
+    out["orientation"] = ojson::array();
     double worst_um = 0, worst_arcsec = 0;
     for (const auto& r : store.results(id)) {
         if (r.kind != acq::kSsmResultKind) continue;
