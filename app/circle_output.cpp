@@ -46,7 +46,7 @@ std::array<AxisFigures, 2> axis_figures(const circ::CircularResult& r) {
 }  // namespace
 
 ojson circle_result_json(const circ::CircularResult& r, const storage::TraceFile& trace,
-                        std::optional<double> tolerance_um) {
+                         std::optional<double> tolerance_um) {
     return ojson::parse(storage::circular_result_json(r, trace, tolerance_um));  // the stored payload's format
 }
 
@@ -77,7 +77,7 @@ void print_circle_result(std::ostream& os, const circ::CircularResult& r, const 
         }
         char line[160];
         std::snprintf(line, sizeof line, "  %-26s %10.3f ± %-8.3f %-5s", d.key.c_str(), d.value, d.std_uncertainty,
-                      circ::diagnostic_unit(d.diag));
+                      circ::diagnostic_unit_symbol(d.diag));
         os << line;
         if (d.contribution_um > 0.0) os << "  " << fmt(d.share_percent, 1) << " %";
         os << '\n';
@@ -98,7 +98,7 @@ void print_circle_result(std::ostream& os, const circ::CircularResult& r, const 
 ojson volumetric_json(const circ::VolumetricResult& v) {
     ojson j = ojson::object();
     for (const auto& f : v.figures)
-        j[f.key] = f.known ? ojson{{"value", f.value}, {"std_uncertainty", f.std_uncertainty}} : ojson(nullptr);
+        j[f.key] = f.known ? ojson{{"value", f.value}, {"value_std", f.std_uncertainty}} : ojson(nullptr);
     return j;
 }
 

@@ -40,7 +40,7 @@ struct PlanOptions {
 };
 
 /// Numbers in messages as the part program writes them (4 decimals, trailing zeros dropped).
-std::string num(double v) {
+std::string num_text(double v) {
     return acquisition::nc_number(v);
 }
 
@@ -53,22 +53,23 @@ void check_feed_for_rate(const circ::TestSpec& t, std::optional<double> rate) {
         throw Error(ErrorCategory::bad_input, "--rate must be a reading rate > 0, readings/s");
     const circ::SamplingLimit lim = circ::sampling_limit(t, rate_hz);
     const double spacing_mm = t.feed_mm_min / (60.0 * rate_hz);
-    const std::string need =
-        std::string(lim.binding) == "feed-in"
-            ? "three samples on the " + num(t.feed_in_mm) + " mm feed-in"
-            : "two samples per " + num(analysis::circular::AnalysisOptions{}.min_pitch_mm) + " mm cyclic-error pitch";
+    const std::string need = std::string(lim.binding) == "feed-in"
+                                 ? "three samples on the " + num_text(t.feed_in_mm) + " mm feed-in"
+                                 : "two samples per " + num_text(analysis::circular::AnalysisOptions{}.min_pitch_mm) +
+                                       " mm cyclic-error pitch";
     const double highest = std::floor(lim.max_feed_mm_min + 1e-6);
     if (spacing_mm <= lim.max_spacing_mm * (1.0 + 1e-9)) {
-        std::cerr << "ballbar: at " << num(rate_hz) << " readings/s the samples lie " << num(spacing_mm)
-                  << " mm apart along the path (at most " << num(lim.max_spacing_mm) << " mm: " << need
-                  << "); the highest usable feed is " << num(highest) << " mm/min\n";
+        std::cerr << "ballbar: at " << num_text(rate_hz) << " readings/s the samples lie " << num_text(spacing_mm)
+                  << " mm apart along the path (at most " << num_text(lim.max_spacing_mm) << " mm: " << need
+                  << "); the highest usable feed is " << num_text(highest) << " mm/min\n";
         return;
     }
     throw Error(ErrorCategory::bad_input,
-                "--feed " + num(t.feed_mm_min) + " mm/min is too fast for " + num(rate_hz) +
-                    " readings/s: the samples would lie " + num(spacing_mm) +
-                    " mm apart along the path, and the diagnosis needs at most " + num(lim.max_spacing_mm) + " mm (" +
-                    need + "); the highest usable feed is " + num(highest) + " mm/min (--feed " + num(highest) + ")");
+                "--feed " + num_text(t.feed_mm_min) + " mm/min is too fast for " + num_text(rate_hz) +
+                    " readings/s: the samples would lie " + num_text(spacing_mm) +
+                    " mm apart along the path, and the diagnosis needs at most " + num_text(lim.max_spacing_mm) +
+                    " mm (" + need + "); the highest usable feed is " + num_text(highest) + " mm/min (--feed " +
+                    num_text(highest) + ")");
 }
 
 /// The part program of trace.md's "The motion", run by run, arcs split into ≤ 90° blocks.
@@ -84,9 +85,9 @@ std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect,
             if (i == ax[0] || i == ax[1]) lo -= t.radius_mm + t.feed_in_mm, hi += t.radius_mm + t.feed_in_mm;
             if (lo < range.min || hi > range.max)
                 throw Error(ErrorCategory::bad_input, std::string("the test leaves the travel of ") + letters[i] +
-                                                          ": it needs " + num(lo) + " .. " + num(hi) +
-                                                          " mm, the machine has " + num(range.min) + " .. " +
-                                                          num(range.max) + " mm");
+                                                          ": it needs " + num_text(lo) + " .. " + num_text(hi) +
+                                                          " mm, the machine has " + num_text(range.min) + " .. " +
+                                                          num_text(range.max) + " mm");
         }
     }
     try {

@@ -30,6 +30,7 @@
 #include "circle_output.hpp"
 #include "circle_test_options.hpp"
 #include "interrupt.hpp"
+#include "json_out.hpp"
 #include "operators.hpp"
 
 namespace ballbar::app {
@@ -100,12 +101,12 @@ class CircleStoreSink : public acq::CircularSink {
                             {"first_seq", stored(r.first_seq)},
                             {"last_seq", stored(r.last_seq)}});
         ojson j = {{"attempt", a.attempt},
-                  {"good", a.good},
-                  {"why", a.why},
-                  {"reference_length_mm", reference_mm_},
-                  {"first_seq", stored(a.first_seq)},
-                  {"last_seq", stored(a.last_seq)},
-                  {"runs", runs}};
+                   {"good", a.good},
+                   {"why", text_or_null(a.why)},
+                   {"reference_length_mm", reference_mm_},
+                   {"first_seq", stored(a.first_seq)},
+                   {"last_seq", stored(a.last_seq)},
+                   {"runs", runs}};
         store_.add_result(*id_, "circular.attempt", j.dump(), std::nullopt, "ballbar circle measure/1");
     }
     void finish(const acq::CircularSummary& sum) {
@@ -164,11 +165,11 @@ std::int64_t create_circular_session(storage::Store& store, const circ::TestSpec
     ns.procedure = "circular";
     ns.notes = notes;
     const ojson meta = {{"format", "ballbar-trace/1"},
-                       {"test", ojson::parse(storage::test_json(test))},
-                       {"reference_length_mm", test.radius_mm},
-                       {"has_bar_temp", true},
-                       {"part_program", {{"dialect", analysis::to_string(dialect)}, {"dwell_s", dwell_s}}},
-                       {"extra", ojson::object()}};
+                        {"test", ojson::parse(storage::test_json(test))},
+                        {"reference_length_mm", test.radius_mm},
+                        {"has_bar_temp", true},
+                        {"part_program", {{"dialect", analysis::to_string(dialect)}, {"dwell_s", dwell_s}}},
+                        {"extra", ojson::object()}};
     ns.metadata_json = meta.dump();
     const std::int64_t id = store.create_session(ns);
     store.start_session(id);
@@ -380,8 +381,9 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
                 throw Error(ErrorCategory::bad_input, "session " + std::to_string(id) + " is " +
                                                           std::string(storage::to_string(before.state)) +
                                                           ": only an interrupted or failed session can be resumed");
-            std::cout << "Session " << id << " is " << storage::to_string(before.state)
-                      << (before.reason.empty() ? "" : ": " + before.reason) << std::endl;
+            // With --json, standard output is the events alone (docs/cli.md): the words go to standard error.
+            (o.json ? std::cerr : std::cout) << "Session " << id << " is " << storage::to_string(before.state)
+                                             << (before.reason.empty() ? "" : ": " + before.reason) << std::endl;
             test = storage::load_trace(store, id).test;
             const ojson meta = ojson::parse(before.metadata_json.empty() ? "{}" : before.metadata_json);
             if (meta.contains("part_program")) {
@@ -472,10 +474,10 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     const auto [result, trace] = analyze_stored(store, id, &j);
     if (o.json) {
         std::cout << ojson{{"event", "done"},
-                          {"session", id},
-                          {"samples", sum.samples},
-                          {"attempts", sum.attempts},
-                          {"result", j}}
+                           {"session", id},
+                           {"samples", sum.samples},
+                           {"attempts", sum.attempts},
+                           {"result", j}}
                          .dump()
                   << std::endl;
     } else {
@@ -588,34 +590,34 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
         pass = pass && c.pass;
         diags.push_back({{"key", c.key},
                          {"unit", circ::diagnostic_unit(c.diag)},
-                         {"measured", c.measured ? ojson(*c.measured) : ojson(nullptr)},
-                         {"std_uncertainty", c.measured ? ojson(c.std_uncertainty) : ojson(nullptr)},
-                         {"truth", c.truth},
+                         {"value", c.measured ? ojson(*c.measured) : ojson(nullptr)},
+                         {"value_std", c.measured ? ojson(c.std_uncertainty) : ojson(nullptr)},
+                         {"true_value", c.truth},
                          {"allowed_error", c.allowed},
                          {"injected", c.injected},
                          {"pass", c.pass},
-                         {"note", c.note}});
+                         {"note", text_or_null(c.note)}});
     }
     const auto& ec = emulator.emulator().counters();
     ojson out = {{"session", id},
-                {"plane", circ::plane_name(test.plane)},
-                {"radius_mm", test.radius_mm},
-                {"feed_mm_min", test.feed_mm_min},
-                {"data_arc_deg", arc},
-                {"attempts", sum.attempts},
-                {"samples", sum.samples},
-                {"pauses", sum.pauses},
-                {"gaps", sum.gaps},
-                {"lost_samples", sum.lost_samples},
-                {"duplicates_dropped", sum.duplicates_dropped},
-                {"dropped_frames", ec.dropped_frames},
-                {"replayed_frames", ec.replayed_frames},
-                {"circularity_um", ojson::array()},
-                {"bidirectional_circularity_um", stored["bidirectional_circularity_um"]},
-                {"diagnostics", diags},
-                {"pass", pass}};
+                 {"plane", circ::plane_name(test.plane)},
+                 {"radius_mm", test.radius_mm},
+                 {"feed_mm_min", test.feed_mm_min},
+                 {"data_arc_deg", arc},
+                 {"attempts", sum.attempts},
+                 {"samples", sum.samples},
+                 {"pauses", sum.pauses},
+                 {"gaps", sum.gaps},
+                 {"lost_samples", sum.lost_samples},
+                 {"duplicates_dropped", sum.duplicates_dropped},
+                 {"dropped_frames", ec.dropped_frames},
+                 {"replayed_frames", ec.replayed_frames},
+                 {"runs", ojson::array()},
+                 {"bidirectional_circularity_um", stored["bidirectional_circularity_um"]},
+                 {"diagnostics", diags},
+                 {"pass", pass}};
     for (const auto& r : result.runs)
-        out["circularity_um"].push_back({{"direction", circ::direction_name(r.direction)}, {"G", r.circularity_um}});
+        out["runs"].push_back({{"direction", circ::direction_name(r.direction)}, {"circularity_um", r.circularity_um}});
     if (o.json) {
         std::cout << out.dump() << std::endl;
     } else {

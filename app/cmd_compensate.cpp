@@ -231,6 +231,8 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     std::ostream& report = out.is_stdout() ? std::cerr : std::cout;  // the program has stdout
     auto mode_name = [](ba::NcFrame f) { return f == ba::NcFrame::Tcp ? "tool-centre-point" : "joint"; };
     if (args.json) {
+        // Line 0 is "no such block": null (docs/cli.md's vocabulary).
+        const auto line_or_null = [](int line) { return line > 0 ? json(line) : json(nullptr); };
         json switches = json::array();
         for (const auto& [line, f] : s.mode_switches) switches.push_back({{"line", line}, {"mode", mode_name(f)}});
         json j{{"blocks", s.blocks},
@@ -239,15 +241,15 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
                {"arcs", s.arcs},
                {"arc_chords", s.arc_chords},
                {"chord_tolerance_mm", args.chord_tolerance_mm},
-               {"modes", {{"joint", s.joint_moves}, {"tool-centre-point", s.tcp_moves}}},
+               {"modes", {{"joint", s.joint_moves}, {"tool_centre_point", s.tcp_moves}}},
                {"mode_switches", switches},
                {"retracts_uncompensated", s.retracts},
                {"method", args.exact ? "exact" : "first-order"},
                {"directions", args.iso_directions ? "iso" : "ballbar"},
                {"max_linear_correction_mm", s.max_linear_mm},
-               {"max_linear_correction_line", s.max_linear_line},
+               {"max_linear_correction_line", line_or_null(s.max_linear_line)},
                {"max_rotary_correction_deg", ba::rad_to_deg(s.max_rotary_rad)},
-               {"max_rotary_correction_line", s.max_rotary_line},
+               {"max_rotary_correction_line", line_or_null(s.max_rotary_line)},
                {"singular_blocks", s.singular},
                {"singular_lines", s.singular_lines},
                {"not_converged", s.not_converged},

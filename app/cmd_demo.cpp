@@ -18,6 +18,7 @@
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/acquisition/session.hpp"
+#include "ballbar/storage/compensation_codec.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
 #include "ballbar/workflow/ssm_demo.hpp"
 #include "circle_measure.hpp"  // demo --test circular
@@ -25,6 +26,7 @@
 #include "figures.hpp"
 #include "files.hpp"
 #include "gauge_commands.hpp"  // demo --instrument: a digital gauge (issue 14)
+#include "json_out.hpp"
 #if __has_include("ballbar/report/build.hpp")
 #include "ballbar/report/build.hpp"
 #define BALLBAR_HAVE_REPORT 1
@@ -68,30 +70,26 @@ device::FaultConfig parse_faults(const std::string& spec) {
     }
 }
 
-ojson angles_json(const std::optional<ba::OrientationErrors>& e, ba::MachineType type, acq::TestKind kind) {
-    if (!e) return nullptr;
-    ojson j = ojson::object();
-    const ba::MeasuredAngles angles = acq::measured_angles(type, kind);
-    if (angles.alpha) j["d_alpha"] = e->d_alpha_rad;
-    if (angles.beta) j["d_beta"] = e->d_beta_rad;
-    if (angles.gamma) j["d_gamma"] = e->d_gamma_rad;
-    return j;
-}
-
-/// `angles` in arcseconds ("d_alpha -46.66\""), each with ± its standard uncertainty from `std` when
-/// given, and flagged (figures.hpp) when more than 5σ from `truth` when given.
-std::string arcsec(const ojson& angles, const ojson& std = nullptr, const ojson& truth = nullptr) {
+/// The angles of one orientation entry in arcseconds ("d_alpha -46.66\""): those under `prefix` + name
+/// + "_rad", the measured ones (prefix "") with ± their standard uncertainty and flagged (figures.hpp)
+/// when more than 5σ from the true value.
+std::string arcsec(const ojson& o, const std::string& prefix) {
     std::ostringstream os;
     os.setf(std::ios::fixed);
     os.precision(2);
-    if (angles.is_null()) return "singular";
     bool first = true;
-    for (const auto& [k, v] : angles.items()) {
-        os << (first ? "" : "  ") << k << " " << ba::rad_to_arcsec(v.get<double>()) << "\"";
-        if (std.is_object() && std.contains(k)) {
-            os << " ± " << ba::rad_to_arcsec(std[k].get<double>()) << "\"";
-            if (truth.is_object() && truth.contains(k))
-                os << sigma_flag(v.get<double>(), std[k].get<double>(), truth[k].get<double>());
+    for (const char* name : {"d_alpha", "d_beta", "d_gamma"}) {
+        const std::string key = prefix + name + "_rad";
+        if (!o.contains(key)) continue;
+        const ojson& v = o[key];
+        if (v.is_null()) return "singular";
+        os << (first ? "" : "  ") << name << " " << ba::rad_to_arcsec(v.get<double>()) << "\"";
+        const std::string std_key = key + "_std";
+        if (prefix.empty() && o.contains(std_key) && o[std_key].is_number()) {
+            const double u = o[std_key].get<double>();
+            os << " ± " << ba::rad_to_arcsec(u) << "\"";
+            const ojson& truth = o[std::string("true_") + name + "_rad"];
+            if (truth.is_number()) os << sigma_flag(v.get<double>(), u, truth.get<double>());
         }
         first = false;
     }
@@ -102,9 +100,8 @@ std::string arcsec(const ojson& angles, const ojson& std = nullptr, const ojson&
 double location_sigma(const ojson& l) {
     double worst = 0;
     for (std::size_t a = 0; a < 3; ++a) {
-        const double s = l["std_mm"][a].get<double>();
-        if (s > 0)
-            worst = std::max(worst, std::abs(l["measured_mm"][a].get<double>() - l["true_mm"][a].get<double>()) / s);
+        const double s = l["e_mm_std"][a].get<double>();
+        if (s > 0) worst = std::max(worst, std::abs(l["e_mm"][a].get<double>() - l["true_e_mm"][a].get<double>()) / s);
     }
     return worst;
 }
@@ -193,19 +190,18 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     for (const auto& [l, tr] : run.locations)
         out["locations"].push_back({{"test", l.test + 1},
                                     {"step", l.step},
-                                    {"measured_mm", {l.ssm.exact_mm.x(), l.ssm.exact_mm.y(), l.ssm.exact_mm.z()}},
-                                    {"std_mm", {l.ssm.std_mm.x(), l.ssm.std_mm.y(), l.ssm.std_mm.z()}},
-                                    {"true_mm", {tr.x(), tr.y(), tr.z()}}});
+                                    {"e_mm", vec3_json(l.ssm.exact_mm)},
+                                    {"e_mm_std", vec3_json(l.ssm.std_mm)},
+                                    {"true_e_mm", vec3_json(tr)}});
     for (const auto& r : sum.tests) {
         const auto& t = run.truth[static_cast<std::size_t>(r.test)];
-        out["orientation"].push_back(
-            {{"test", r.test + 1},
-             {"kind", std::string(acq::to_string(r.kind))},
-             {"measured_rad", angles_json(r.orientation.exact, *type, r.kind)},
-             {"std_rad", angles_json(r.std_rad, *type, r.kind)},  // of measured_rad
-             {"true_rad", angles_json(t.result.orientation.exact, *type, r.kind)},
-             {"measured_first_order_rad", angles_json(r.orientation.first_order, *type, r.kind)},
-             {"true_first_order_rad", angles_json(t.result.orientation.first_order, *type, r.kind)}});
+        ojson o_j = {{"test", r.test + 1}, {"kind", std::string(acq::to_string(r.kind))}};
+        put_angles(o_j, "", "", r.orientation.exact, *type, r.kind);
+        put_angles(o_j, "", "_std", r.std_rad, *type, r.kind);
+        put_angles(o_j, "true_", "", t.result.orientation.exact, *type, r.kind);
+        put_angles(o_j, "first_order_", "", r.orientation.first_order, *type, r.kind);
+        put_angles(o_j, "true_first_order_", "", t.result.orientation.first_order, *type, r.kind);
+        out["orientation"].push_back(std::move(o_j));
     }
     out["samples"] = sum.samples;
     out["programs"] = sum.programs;
@@ -230,8 +226,8 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         code = run_compensation_demo(co, ss, o.json, &cr);
         if (o.json) {
             out["compensation"] = ojson::parse(ss.str());
-            // Issue 6's shape at the top level too: improvement, residual_um, identified (and rms_before_um).
-            for (const char* key : {"improvement", "rms_before_um", "residual_um", "identified"})
+            // Issue 6's figures at the top level too: the improvement, the RMS before and after, the estimates.
+            for (const char* key : {"improvement_ratio", "rms_before_um", "rms_after_um", "identified"})
                 out[key] = out["compensation"][key];
         } else {
             compensation_text = ss.str();
@@ -239,18 +235,15 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         // Stored with the demo session, so its report shows the before/after (report/ reads kind
         // "compensation") -- only with a TTTRR session: the proof runs on an emulated TTTRR machine.
         if (*type == ba::MachineType::TTTRR) {
-            ojson stored;
-            stored["metric"] = "RMS tool-ball error over a " + std::to_string(cr.path_blocks) +
-                               "-block test path, before and after " + (cr.exact ? "exact" : "first-order") +
-                               " compensation (compensation demo: its own emulated TTTRR machine, seed " +
-                               std::to_string(o.seed) + ")";
-            stored["axes"] = ojson::array();
+            storage::CompensationRecord stored;
+            stored.metric = "RMS tool-ball error over a " + std::to_string(cr.path_blocks) +
+                            "-block test path, before and after " + (cr.exact ? "exact" : "first-order") +
+                            " compensation (compensation demo: its own emulated TTTRR machine, seed " +
+                            std::to_string(o.seed) + ")";
             for (int a = 0; a < 3; ++a)
-                stored["axes"].push_back({{"axis", std::string(1, "XYZ"[a])},
-                                          {"unit", "µm"},
-                                          {"before", cr.before_um[a]},
-                                          {"after", cr.after_um[a]}});
-            store.add_result(id, "compensation", stored.dump(), std::nullopt, "ballbar demo/1");
+                stored.axes.push_back({std::string(1, "XYZ"[a]), cr.before_um[a], cr.after_um[a]});
+            store.add_result(id, std::string(storage::kCompensationResultKind), storage::compensation_to_json(stored),
+                             std::nullopt, "ballbar demo/1");
         }
     }
 #else
@@ -273,8 +266,8 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
             "  test step   measured (x, y, z)              true (x, y, z)                  |diff|   (!! more than "
             "5σ from the truth)\n");
         for (const auto& l : out["locations"]) {
-            const auto& m = l["measured_mm"];
-            const auto& t = l["true_mm"];
+            const auto& m = l["e_mm"];
+            const auto& t = l["true_e_mm"];
             const double d =
                 std::hypot(m[0].get<double>() - t[0].get<double>(), m[1].get<double>() - t[1].get<double>(),
                            m[2].get<double>() - t[2].get<double>());
@@ -289,8 +282,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         std::printf("\nOrientation errors (exact model), arc-seconds:\n");
         for (const auto& t : out["orientation"])
             std::printf("  test %d (%s): measured %s | true %s\n", t["test"].get<int>(),
-                        t["kind"].get<std::string>().c_str(),
-                        arcsec(t["measured_rad"], t["std_rad"], t["true_rad"]).c_str(), arcsec(t["true_rad"]).c_str());
+                        t["kind"].get<std::string>().c_str(), arcsec(t, "").c_str(), arcsec(t, "true_").c_str());
         std::printf("\nSession %lld stored in %s (%zu samples).\n", static_cast<long long>(id), store.path().c_str(),
                     sum.samples);
         std::printf(

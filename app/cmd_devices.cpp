@@ -5,19 +5,20 @@
 
 #include "ballbar/device/enumerate.hpp"
 #include "command.hpp"
+#include "json_out.hpp"
 
 namespace {
 
-nlohmann::json to_json(const ballbar::device::FoundInstrument& f) {
-    nlohmann::json j{{"link", ballbar::device::to_string(f.link)},
-                     {"model", f.model},
-                     {"serial", f.serial},
-                     {"path", f.path},
-                     {"uri", f.uri},
-                     {"vid", ballbar::device::hex4(f.vid)},
-                     {"pid", ballbar::device::hex4(f.pid)}};
-    if (!f.note.empty()) j["note"] = f.note;
-    return j;
+nlohmann::ordered_json to_json(const ballbar::device::FoundInstrument& f) {
+    using ballbar::app::text_or_null;
+    return {{"link", ballbar::device::to_string(f.link)},
+            {"model", text_or_null(f.model)},
+            {"serial", text_or_null(f.serial)},
+            {"path", f.path},
+            {"uri", f.uri},
+            {"vid", ballbar::device::hex4(f.vid)},
+            {"pid", ballbar::device::hex4(f.pid)},
+            {"note", text_or_null(f.note)}};
 }
 
 }  // namespace
@@ -31,7 +32,7 @@ BALLBAR_COMMAND(devices) {
             const auto found = ballbar::device::enumerate_instruments();
             for (const auto& w : found.warnings) std::cerr << "ballbar: warning: " << w << '\n';
             if (*json) {
-                nlohmann::json arr = nlohmann::json::array();
+                nlohmann::ordered_json arr = nlohmann::ordered_json::array();
                 for (const auto& f : found.instruments) arr.push_back(to_json(f));
                 std::cout << arr.dump(2) << '\n';
                 return ballbar::app::kExitOk;

@@ -27,6 +27,7 @@
 #include "ballbar/version.hpp"
 #include "ballbar/workflow/identify.hpp"
 #include "command.hpp"
+#include "json_out.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -50,74 +51,75 @@ std::vector<std::string> param_names(const std::vector<ba::Param>& params) {
     return out;
 }
 
-/// The JSON shape (docs/discovery.md).
+/// Degrees of freedom are counts (docs/cli.md): the analysis keeps them as doubles for its statistics.
+ojson dof_json(double dof1, double dof2) {
+    return ojson::array({std::llround(dof1), std::llround(dof2)});
+}
+
+/// The result in docs/cli.md's vocabulary (docs/discovery.md): a step's estimate is `value` with its
+/// `unit` and `value_std`; the test's statistic is `statistic` under `criterion`.
 ojson result_json(const ba::DiscoveryResult& r) {
     ojson steps = ojson::array();
-    for (const ba::DiscoveryStep& st : r.steps)
+    for (const ba::DiscoveryStep& st : r.steps) {
+        const std::string iso(st.effect->iso);
         steps.push_back({{"effect", std::string(st.effect->id)},
-                         {"iso", std::string(st.effect->iso)},
-                         {"estimate", st.estimate},
+                         {"iso", iso.empty() ? ojson(nullptr) : ojson(iso)},
+                         {"kind", "library"},
                          {"unit", std::string(ba::to_string(st.effect->unit()))},
-                         {"stderr", st.std_error},
+                         {"value", st.estimate},
+                         {"value_std", st.std_error},
                          {"rms_before_um", st.rms_before_mm * 1e3},
                          {"rms_after_um", st.rms_after_mm * 1e3},
                          {"criterion", st.criterion},
-                         {"value", st.value},
+                         {"statistic", st.value},
                          {"explained_by", std::string(ba::to_string(st.explained_by, r.type))},
-                         {"kind", "library"},
-                         {"accepted", !st.withdrawn}});
-    for (std::size_t i = 0; i < r.steps.size(); ++i)
-        if (r.steps[i].withdrawn)
-            steps[i]["withdrawn"] =
-                "no longer passes given the learned terms (F-test, Bonferroni over the model's "
-                "library effects)";
+                         {"accepted", !st.withdrawn},
+                         {"withdrawn", st.withdrawn ? ojson("no longer passes given the learned terms (F-test, "
+                                                            "Bonferroni over the model's library effects)")
+                                                    : ojson(nullptr)}});
+    }
     for (const ba::EmpiricalStep& st : r.learned) {
-        ojson terms = ojson::object(), stderrs = ojson::object(), units = ojson::object();
-        for (const ba::LearnedTerm& t : st.terms) {
-            terms[t.term.name()] = t.value;
-            stderrs[t.term.name()] = t.std_error;
-            units[t.term.name()] = t.term.unit();
-        }
+        ojson terms = ojson::array();
+        for (const ba::LearnedTerm& t : st.terms)
+            terms.push_back(
+                {{"name", t.term.name()}, {"unit", t.term.unit()}, {"value", t.value}, {"value_std", t.std_error}});
         steps.push_back({{"effect", st.family},
                          {"kind", "empirical"},
                          {"where", st.description},
                          {"terms", terms},
-                         {"terms_stderr", stderrs},
-                         {"terms_unit", units},
                          {"rms_before_um", st.rms_before_mm * 1e3},
                          {"rms_after_um", st.rms_after_mm * 1e3},
                          {"criterion", "F"},
-                         {"value", st.f},
-                         {"dof", {st.dof1, st.dof2}},
+                         {"statistic", st.f},
+                         {"dof", dof_json(st.dof1, st.dof2)},
                          {"p_value", st.p_value},
                          {"threshold_p", st.threshold_p},
                          {"explained_by", st.variable}});
     }
     auto verdict = [](const ba::NoiseVerdict& v) {
-        ojson j{{"result", v.text}, {"rms_um", v.rms_mm * 1e3}};
-        if (v.floor_known) {
-            j["ratio"] = v.ratio;
-            j["statistic"] = "chi-square";
-            j["chi2"] = v.chi2;
-            j["dof"] = v.dof;
-            j["p_value"] = v.p_value;
-            j["alpha"] = v.alpha;
-        }
-        return j;
+        // Without a known noise floor there is no test: its figures are null.
+        const auto known = [&v](ojson x) { return v.floor_known ? x : ojson(nullptr); };
+        return ojson{{"result", v.text},
+                     {"rms_um", v.rms_mm * 1e3},
+                     {"ratio", known(v.ratio)},
+                     {"statistic", known("chi-square")},
+                     {"chi2", known(v.chi2)},
+                     {"dof", known(std::llround(v.dof))},
+                     {"p_value", known(v.p_value)},
+                     {"alpha", known(v.alpha)}};
     };
-    ojson out{{"base_model", param_names(r.base_model)},
-             {"rms_initial_um", r.rms_initial_mm * 1e3},
-             {"steps", steps},
-             {"rms_final_um", r.rms_final_mm * 1e3},
-             {"confounded", r.confounded},
-             {"unidentifiable", r.unidentifiable},
-             {"noise_floor_um", r.noise_floor.known() ? ojson(r.noise_floor.sigma_mm * 1e3) : ojson(nullptr)},
-             {"noise_source", r.noise_floor.source},
-             {"noise_detail", r.noise_floor.detail},
-             {"verdict_before_search", verdict(r.verdict_library)},
-             {"verdict", verdict(r.verdict)}};
-    if (!r.unlocated.empty()) out["unlocated"] = r.unlocated;
-    return out;
+    return ojson{{"base_model", param_names(r.base_model)},
+                 {"rms_initial_um", r.rms_initial_mm * 1e3},
+                 {"steps", steps},
+                 {"rms_final_um", r.rms_final_mm * 1e3},
+                 {"confounded", r.confounded},
+                 {"unidentifiable", r.unidentifiable},
+                 {"noise_floor_um", r.noise_floor.known() ? ojson(r.noise_floor.sigma_mm * 1e3) : ojson(nullptr)},
+                 {"noise_source", text_or_null(r.noise_floor.source)},
+                 {"noise_detail", text_or_null(r.noise_floor.detail)},
+                 {"verdict_before_search", verdict(r.verdict_library)},
+                 {"verdict", verdict(r.verdict)},
+                 {"unlocated", text_or_null(r.unlocated)}};
 }
 
 /// The learned terms as the stored model holds them ({"C_angular_h1_cos": value, ...}).
@@ -187,7 +189,7 @@ ojson details_json(const ba::DiscoveryResult& r, const std::vector<std::string>&
                                 {"variable", f.variable},
                                 {"terms", f.terms},
                                 {"f", f.f},
-                                {"dof", {f.dof1, f.dof2}},
+                                {"dof", dof_json(f.dof1, f.dof2)},
                                 {"p_value", f.p_value},
                                 {"passes", f.passes}});
         step_trends.push_back({{"variable", st.variable},

@@ -75,11 +75,10 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     const workflow::IdentifyResult r = workflow::identify(std::move(inputs), io, opener(true));
 
     json out = json::parse(r.payload_json);
-    if (r.stored) {
-        out["model_id"] = r.stored->id;
-        out["model_name"] = r.stored->name;
-        out["model_version"] = r.stored->version;
-    }
+    // With --no-store there is no stored model: null (docs/cli.md), not absent keys.
+    out["model_id"] = r.stored ? json(r.stored->id) : json(nullptr);
+    out["model_name"] = r.stored ? json(r.stored->name) : json(nullptr);
+    out["model_version"] = r.stored ? json(r.stored->version) : json(nullptr);
     if (args.json) {
         std::cout << out.dump(2) << '\n';
     } else {

@@ -43,7 +43,7 @@ struct MeasureOptions {
 };
 
 /// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm"
-std::string vec_um(const ba::Vec3& v_mm, const ba::Vec3& std_mm) {
+std::string vec_um_pm(const ba::Vec3& v_mm, const ba::Vec3& std_mm) {
     std::ostringstream os;
     os.setf(std::ios::fixed);
     os.precision(2);
@@ -57,8 +57,8 @@ std::string vec_um(const ba::Vec3& v_mm, const ba::Vec3& std_mm) {
 void print_results(std::ostream& out, const acq::Plan& plan, const acq::SessionSummary& sum) {
     const ba::MachineType type = plan.machine.geometry.type;
     for (const auto& t : sum.tests) {
-        out << "test " << t.test + 1 << " (" << acq::to_string(t.kind) << "):\n  ΔV1 " << vec_um(t.dV1_mm, t.dV1_std_mm)
-            << "\n  ΔV2 " << vec_um(t.dV2_mm, t.dV2_std_mm) << "\n";
+        out << "test " << t.test + 1 << " (" << acq::to_string(t.kind) << "):\n  ΔV1 "
+            << vec_um_pm(t.dV1_mm, t.dV1_std_mm) << "\n  ΔV2 " << vec_um_pm(t.dV2_mm, t.dV2_std_mm) << "\n";
         if (!t.orientation.exact) {
             out << "  orientation: " << t.orientation.singular << "\n";
             continue;
@@ -179,8 +179,9 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         // Why it stopped is shown first, also when it cannot be continued.
         try {
             const storage::SessionInfo before = opened->session(opened->find_session(o.resume));
-            std::cout << "Session " << before.id << " is " << storage::to_string(before.state)
-                      << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
+            // With --json, standard output is the events alone (docs/cli.md): the words go to standard error.
+            (o.json ? std::cerr : std::cout) << "Session " << before.id << " is " << storage::to_string(before.state)
+                                             << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
         } catch (const storage::StorageError& e) {
             throw as_error(e);  // no such session: exit 2, as `sessions show` says it
         }
@@ -194,9 +195,11 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     const std::int64_t id = prepared.id;
     const acq::Plan& plan = prepared.plan;
     const std::vector<acq::CapturedPoint>& done = prepared.done;
-    std::cout << "Session " << id << (done.empty() ? "" : " (resumed after " + std::to_string(done.size()) + " points)")
-              << ": " << ba::to_string(plan.machine.geometry.type) << ", " << plan.test_count() << " tests, "
-              << plan.points.size() << " points.\n";
+    (o.json ? std::cerr : std::cout) << "Session " << id
+                                     << (done.empty() ? ""
+                                                      : " (resumed after " + std::to_string(done.size()) + " points)")
+                                     << ": " << ba::to_string(plan.machine.geometry.type) << ", " << plan.test_count()
+                                     << " tests, " << plan.points.size() << " points.\n";
     const std::string program =
         o.program_file.empty() ? "ballbar-session-" + std::to_string(id) + ".nc" : o.program_file;
 

@@ -19,6 +19,7 @@
 #include "command.hpp"
 #include "gauge_commands.hpp"
 #include "interrupt.hpp"
+#include "json_out.hpp"
 
 namespace {
 
@@ -126,22 +127,24 @@ int run_monitor(const MonitorOptions& o) {
         failure =
             "the instrument answered but sent no samples: it does not stream (check its mode and cable, or "
             "power-cycle it)";
-    const auto or_null = [&sum](double v) { return sum.n > 0 ? nlohmann::json(v) : nlohmann::json(nullptr); };
+    const auto or_null = [&sum](double v) {
+        return sum.n > 0 ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+    };
     if (o.json) {
-        nlohmann::json j{{"samples", sum.n},
-                         {"lost_frames", st.lost_frames},
-                         {"rate_hz", or_null(sum.rate_hz())},
-                         {"mean_mm", or_null(sum.mean)},
-                         {"std_mm", or_null(sum.std_mm())},
-                         {"bar_temp_C", or_null(sum.temp_C)},
-                         {"invalid_frames", st.invalid_frames},
-                         {"queue_drops", st.queue_drops},
-                         {"replayed_frames", st.replayed_frames},
-                         {"unknown_version_frames", st.unknown_version_frames},
-                         {"model", info.model},
-                         {"serial", info.serial},
-                         {"device", o.device}};
-        if (!failure.empty()) j["error"] = failure;
+        nlohmann::ordered_json j{{"samples", sum.n},
+                                 {"lost_frames", st.lost_frames},
+                                 {"rate_hz", or_null(sum.rate_hz())},
+                                 {"mean_mm", or_null(sum.mean)},
+                                 {"sd_mm", or_null(sum.std_mm())},  // the readings' spread (docs/cli.md)
+                                 {"bar_temp_C", or_null(sum.temp_C)},
+                                 {"invalid_frames", st.invalid_frames},
+                                 {"queue_drops", st.queue_drops},
+                                 {"replayed_frames", st.replayed_frames},
+                                 {"unknown_version_frames", st.unknown_version_frames},
+                                 {"model", ballbar::app::text_or_null(info.model)},
+                                 {"serial", ballbar::app::text_or_null(info.serial)},
+                                 {"device", o.device},
+                                 {"error", ballbar::app::text_or_null(failure)}};
         std::cout << j.dump() << '\n';
     } else if (sum.n > 0) {
         std::cout << sum.n << " samples, " << st.lost_frames << " lost frames, " << sum.rate_hz() << " Hz, mean "

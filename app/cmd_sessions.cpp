@@ -213,7 +213,7 @@ int show_session(const SessionsOptions& o, const Globals& globals, std::ostream&
     return kExitOk;
 }
 
-int run(const SessionsOptions& o, const Globals& globals, bool show) {
+int run_sessions(const SessionsOptions& o, const Globals& globals, bool show) {
     // Stored text (operator, notes, machine names, file names, reasons) is anyone's: the screen gets it
     // with its control characters made visible, never a terminal escape sequence (issue 24).
     std::ostringstream text;
@@ -240,6 +240,6 @@ BALLBAR_COMMAND(sessions) {
     show->add_flag("--json", opts->show_json, "the whole session as JSON (as `export --format json`)");
     sub->callback([opts, show, &globals] {
         const bool is_show = show->parsed();
-        globals.action = [opts, is_show, &globals] { return ballbar::app::run(*opts, globals, is_show); };
+        globals.action = [opts, is_show, &globals] { return ballbar::app::run_sessions(*opts, globals, is_show); };
     });
 }

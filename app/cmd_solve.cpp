@@ -82,25 +82,25 @@ ba::Vec3 get_vec3(const json& obj, const std::string& path, const char* key) {
     return vec3(*find(obj, path, key, true), join(path, key));
 }
 /// The documented range of a request's value (docs/analysis.md, "Ranges"), or RequestError naming it.
-double in_range(double v, const std::string& field, double lo, double hi, const char* unit) {
+double within_range(double v, const std::string& field, double lo, double hi, const char* unit) {
     if (const std::string why = ba::limits::check_in(v, lo, hi, unit); !why.empty()) throw RequestError{why, field};
     return v;
 }
-ba::Vec3 in_range(const ba::Vec3& v, const std::string& field, double lim, const char* unit) {
-    for (int i = 0; i < 3; ++i) in_range(v[i], index(field, static_cast<std::size_t>(i)), -lim, lim, unit);
+ba::Vec3 within_range(const ba::Vec3& v, const std::string& field, double lim, const char* unit) {
+    for (int i = 0; i < 3; ++i) within_range(v[i], index(field, static_cast<std::size_t>(i)), -lim, lim, unit);
     return v;
 }
 /// A position (socket, pivot, point) and a small length error (ΔV, Δl): ±100 m and ±10 mm.
 ba::Vec3 get_position(const json& obj, const std::string& path, const char* key) {
-    return in_range(get_vec3(obj, path, key), join(path, key), ba::limits::kPosition_mm, "mm");
+    return within_range(get_vec3(obj, path, key), join(path, key), ba::limits::kPosition_mm, "mm");
 }
 ba::Vec3 get_error(const json& obj, const std::string& path, const char* key) {
-    return in_range(get_vec3(obj, path, key), join(path, key), ba::limits::kSmallLength_mm, "mm");
+    return within_range(get_vec3(obj, path, key), join(path, key), ba::limits::kSmallLength_mm, "mm");
 }
 /// A test's rotation, rad: at most one turn each way.
 double get_rotation(const json& obj, const std::string& path, const char* key) {
     const double lim = ba::deg_to_rad(ba::limits::kRotation_deg);
-    return in_range(get_number(obj, path, key), join(path, key), -lim, lim, "rad");
+    return within_range(get_number(obj, path, key), join(path, key), -lim, lim, "rad");
 }
 /// [0, 0, z] fields of the seed's models: x and y must be zero.
 double get_axial(const json& obj, const std::string& path, const char* key, const char* why) {
@@ -110,7 +110,7 @@ double get_axial(const json& obj, const std::string& path, const char* key, cons
             throw RequestError{std::string("must be 0: ") + why, index(join(path, key), static_cast<std::size_t>(i))};
     return v.z();
 }
-json to_json(const ba::Vec3& v) {
+json vec_json(const ba::Vec3& v) {
     return json::array({v.x(), v.y(), v.z()});
 }
 
@@ -142,7 +142,7 @@ json solve_ssm(const json& req) {
     std::vector<ba::Vec3> points;
     for (std::size_t i = 0; i < jp.size(); ++i) {
         points.push_back(
-            in_range(vec3(jp[i], index("points_mm", i)), index("points_mm", i), ba::limits::kPosition_mm, "mm"));
+            within_range(vec3(jp[i], index("points_mm", i)), index("points_mm", i), ba::limits::kPosition_mm, "mm"));
         if ((points.back() - socket).norm() < 1e-6)
             throw RequestError{"coincides with the socket", index("points_mm", i)};
     }
@@ -150,7 +150,7 @@ json solve_ssm(const json& req) {
         throw RequestError{"SSM needs at least 3 points, got " + std::to_string(points.size()), "points_mm"};
     const std::vector<double> dl = numbers(*find(req, "", "delta_l_mm", true), "delta_l_mm");
     for (std::size_t i = 0; i < dl.size(); ++i)
-        in_range(dl[i], index("delta_l_mm", i), -ba::limits::kSmallLength_mm, ba::limits::kSmallLength_mm, "mm");
+        within_range(dl[i], index("delta_l_mm", i), -ba::limits::kSmallLength_mm, ba::limits::kSmallLength_mm, "mm");
     if (dl.size() != points.size())
         throw RequestError{
             "has " + std::to_string(dl.size()) + " entries for " + std::to_string(points.size()) + " points",
@@ -170,11 +170,11 @@ json solve_ssm(const json& req) {
     ba::SsmOptions opt;
     if (const json* js = find(req, "", "std_mm", false)) {
         opt.reading_std_mm = number(*js, "std_mm");
-        in_range(opt.reading_std_mm, "std_mm", 0, ba::limits::kSmallLength_mm, "mm");
+        within_range(opt.reading_std_mm, "std_mm", 0, ba::limits::kSmallLength_mm, "mm");
     }
     if (const json* jc = find(req, "", "max_condition", false)) {
         opt.max_condition = number(*jc, "max_condition");
-        in_range(opt.max_condition, "max_condition", 1, 1e12, "");
+        within_range(opt.max_condition, "max_condition", 1, 1e12, "");
     }
     // The layout's conditioning is the points' fault; anything the solver refuses after that, the readings'.
     const double cond = ba::ssm_condition_number(socket, points);
@@ -192,12 +192,12 @@ json solve_ssm(const json& req) {
         throw RequestError{e.what(), "delta_l_mm"};
     }
     json out;
-    out["linear_mm"] = to_json(r.linear_mm);
-    out["exact_mm"] = to_json(r.exact_mm);
+    out["linear_mm"] = vec_json(r.linear_mm);
+    out["exact_mm"] = vec_json(r.exact_mm);
     out["condition_number"] = r.condition_number;
-    out["std_mm"] = to_json(r.std_mm);
+    out["exact_mm_std"] = vec_json(r.std_mm);  // its standard uncertainty (docs/cli.md: K_std)
     out["residual_rms_mm"] = r.residual_rms_mm ? json(*r.residual_rms_mm) : json(nullptr);
-    out["reading_std_mm"] = opt.reading_std_mm;
+    out["reading_sd_mm"] = opt.reading_std_mm;  // the readings' spread the request gave (std_mm)
     out["iterations"] = r.iterations;
     return out;
 }
@@ -221,9 +221,9 @@ json solution_json(const ba::OrientationSolution& s, Angles which) {
     json out;
     out["first_order"] = s.first_order ? angles_json(*s.first_order, which) : json(nullptr);
     out["exact"] = s.exact ? angles_json(*s.exact, which) : json(nullptr);
-    out["nominal_after_mm"] = to_json(s.nominal_after_mm);
-    if (s.exact) out["exact_residual_mm"] = s.exact_residual_mm;
-    if (!s.singular.empty()) out["singular"] = s.singular;
+    out["nominal_after_mm"] = vec_json(s.nominal_after_mm);
+    out["exact_residual_mm"] = s.exact ? json(s.exact_residual_mm) : json(nullptr);
+    out["singular"] = s.singular.empty() ? json(nullptr) : json(s.singular);
     return out;
 }
 
@@ -277,14 +277,14 @@ json solve_rtttr(const json& req) {
     out["nominal_after_mm"] = json::object();
     std::string singular;
     if (s) {
-        out["nominal_after_mm"]["spindle"] = to_json(s->nominal_after_mm);
+        out["nominal_after_mm"]["spindle"] = vec_json(s->nominal_after_mm);
         if (!s->singular.empty()) singular = "spindle: " + s->singular;
     }
     if (t) {
-        out["nominal_after_mm"]["table"] = to_json(t->nominal_after_mm);
+        out["nominal_after_mm"]["table"] = vec_json(t->nominal_after_mm);
         if (!t->singular.empty()) singular += (singular.empty() ? "" : "; ") + std::string("table: ") + t->singular;
     }
-    if (!singular.empty()) out["singular"] = singular;
+    out["singular"] = singular.empty() ? json(nullptr) : json(singular);
     return out;
 }
 
@@ -326,7 +326,7 @@ json solve_orientation(const json& req) {
 }
 
 /// Runs one solver on the request; prints the answer or the JSON error. Returns the exit code.
-int run(const std::string& input_path, json (*solver)(const json&)) {
+int run_solver(const std::string& input_path, json (*solver)(const json&)) {
     try {
         const json answer = solver(read_request(input_path));
         std::cout << answer.dump() << '\n';
@@ -351,7 +351,8 @@ void add_solver(CLI::App& solve, Globals& globals, const char* name, const char*
     auto* sub = solve.add_subcommand(name, description);
     sub->add_option("--input", *input, "read the JSON request from FILE instead of stdin")->option_text("FILE");
     sub->footer(footer);
-    sub->callback([&globals, input, solver]() { globals.action = [input, solver]() { return run(*input, solver); }; });
+    sub->callback(
+        [&globals, input, solver]() { globals.action = [input, solver]() { return run_solver(*input, solver); }; });
 }
 
 }  // namespace

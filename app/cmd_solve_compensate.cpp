@@ -103,12 +103,11 @@ json solve_compensate(const json& req) {
     const ba::LeiHsuCorrection fo = ba::lei_hsu_first_order(u, dv, tol);
     const ba::LeiHsuCorrection ex = ba::lei_hsu_exact(off, u, dv, tol);
     json out;
-    out["du"] = json::array();
-    out["exact_du"] = json::array();
-    for (int i = 0; i < 5; ++i) {
-        out["du"].push_back(fo.du[i]);
-        out["exact_du"].push_back(ex.du[i]);
-    }
+    // The correction of u = [x, y, z, θa, θc], split by unit (docs/cli.md: the unit in the key).
+    out["du_mm"] = {fo.du[0], fo.du[1], fo.du[2]};
+    out["du_rad"] = {fo.du[3], fo.du[4]};
+    out["exact_du_mm"] = {ex.du[0], ex.du[1], ex.du[2]};
+    out["exact_du_rad"] = {ex.du[3], ex.du[4]};
     out["singular"] = fo.singular;
     out["method"] = fo.singular
                         ? "first order: theta_a = 0 forms of seed-math (no C correction); exact: Gauss-Newton, C held"

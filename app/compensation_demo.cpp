@@ -231,34 +231,35 @@ int run_compensation_demo(const CompensationDemoOptions& opt, std::ostream& out,
     }
 
     if (json) {
-        nlohmann::json j;
-        j["improvement"] = {{"X", gain.x()}, {"Y", gain.y()}, {"Z", gain.z()}};
-        j["rms_before_um"] = {{"X", before.rms.x() * 1e3}, {"Y", before.rms.y() * 1e3}, {"Z", before.rms.z() * 1e3}};
-        j["residual_um"] = {{"X", after.rms.x() * 1e3},
-                            {"Y", after.rms.y() * 1e3},
-                            {"Z", after.rms.z() * 1e3},
-                            {"max", after.max_mm * 1e3},
-                            {"identification_rms", fit.residual_rms_mm * 1e3}};
-        j["identified"] = nlohmann::json::array();
+        // docs/cli.md's vocabulary: the unit in each key, an item's unit in `unit` where a list mixes them.
+        nlohmann::ordered_json j;
+        const auto per_axis = [](const Vec3& v, double f) {
+            return nlohmann::ordered_json{{"X", v.x() * f}, {"Y", v.y() * f}, {"Z", v.z() * f}};
+        };
+        j["improvement_ratio"] = per_axis(gain, 1);
+        j["rms_before_um"] = per_axis(before.rms, 1e3);
+        j["rms_after_um"] = per_axis(after.rms, 1e3);
+        j["max_after_um"] = after.max_mm * 1e3;
+        j["identification_rms_um"] = fit.residual_rms_mm * 1e3;
+        j["identified"] = nlohmann::ordered_json::array();
         for (const auto& e : fit.estimates) {
             if (!e.param) continue;
-            j["identified"].push_back(
-                {{"name", e.name},
-                 {"unit", std::string(to_string(param_info(*e.param).unit))},
-                 {"estimate", e.estimate},
-                 {"true", truth[*e.param]},
-                 {"identifiable_true", identifiable(*e.param)},
-                 {"std", e.std},
-                 {"observable", e.observable},
-                 {"sigma_from_true",
-                  e.std > 0 ? nlohmann::json(std::abs(e.estimate - truth[*e.param]) / e.std) : nlohmann::json(nullptr)},
-                 // |estimate − identifiable| / std; over 5 the text output flags it
-                 {"sigma_from_identifiable", e.std > 0
-                                                 ? nlohmann::json(std::abs(e.estimate - identifiable(*e.param)) / e.std)
-                                                 : nlohmann::json(nullptr)}});
+            const auto sigma = [&](double reference) {
+                return e.std > 0 ? nlohmann::ordered_json(std::abs(e.estimate - reference) / e.std) : nullptr;
+            };
+            j["identified"].push_back({{"name", e.name},
+                                       {"unit", std::string(to_string(param_info(*e.param).unit))},
+                                       {"value", e.estimate},
+                                       {"value_std", e.std},
+                                       {"true_value", truth[*e.param]},
+                                       {"identifiable_value", identifiable(*e.param)},
+                                       {"observable", e.observable},
+                                       {"sigma_from_true", sigma(truth[*e.param])},
+                                       // |estimate − identifiable| / std; over 5 the text output flags it
+                                       {"sigma_from_identifiable", sigma(identifiable(*e.param))}});
         }
-        j["unobservable"] = nlohmann::json::array();
-        for (const auto& s : plan.unreachable) j["unobservable"].push_back(s);
+        j["not_identifiable"] = nlohmann::ordered_json::array();
+        for (const auto& s : plan.unreachable) j["not_identifiable"].push_back(s);
         j["readings"] = readings.readings.size();
         j["locations"] = plan.locations.size();
         j["converged"] = fit.converged;

@@ -19,6 +19,7 @@
 #include "ballbar/workflow/gauge_source.hpp"
 #include "command.hpp"
 #include "interrupt.hpp"
+#include "json_out.hpp"
 
 namespace ballbar::app {
 
@@ -79,25 +80,29 @@ int run_gauge_monitor(const std::string& uri, double seconds, bool json, double 
     const auto& st = sampler->stats();
     const double std_mm = n > 1 ? std::sqrt(m2 / static_cast<double>(n - 1)) : 0.0;
     if (json) {
-        nlohmann::json j{{"device", uri},
-                         {"kind", gg::to_string(id.kind)},
-                         {"maker", id.maker},
-                         {"model", id.model},
-                         {"serial", id.serial},
-                         {"firmware", id.firmware},
-                         {"inch", id.inch},
-                         {"low_battery", id.low_battery},
-                         {"samples", n},
-                         {"mean_mm", mean},
-                         {"std_mm", std_mm},
-                         {"rate_hz", st.rate_hz},
-                         {"resolution_mm", st.resolution_mm},
-                         {"not_ready", st.not_ready},
-                         {"out_of_range", st.out_of_range},
-                         {"timeouts", st.timeouts},
-                         {"invalid", st.invalid},
-                         {"errors", st.errors}};
-        if (!failure.empty()) j["error"] = failure;
+        // As the ball-bar's monitor: no readings give null, not 0; sd is the readings' spread.
+        const auto or_null = [n](double v) {
+            return n > 0 ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+        };
+        nlohmann::ordered_json j{{"device", uri},
+                                 {"kind", gg::to_string(id.kind)},
+                                 {"maker", text_or_null(id.maker)},
+                                 {"model", text_or_null(id.model)},
+                                 {"serial", text_or_null(id.serial)},
+                                 {"firmware", text_or_null(id.firmware)},
+                                 {"inch", id.inch},
+                                 {"low_battery", id.low_battery},
+                                 {"samples", n},
+                                 {"mean_mm", or_null(mean)},
+                                 {"sd_mm", n > 1 ? nlohmann::ordered_json(std_mm) : nlohmann::ordered_json(nullptr)},
+                                 {"rate_hz", st.rate_hz},
+                                 {"resolution_mm", st.resolution_mm},
+                                 {"not_ready", st.not_ready},
+                                 {"out_of_range", st.out_of_range},
+                                 {"timeouts", st.timeouts},
+                                 {"invalid", st.invalid},
+                                 {"errors", st.errors},
+                                 {"error", text_or_null(failure)}};
         std::cout << j.dump() << '\n';
     } else {
         std::cout << n << " readings, " << st.rate_hz << " readings/s, mean " << mean << " mm, std " << std_mm * 1e3
@@ -110,7 +115,7 @@ int run_gauge_monitor(const std::string& uri, double seconds, bool json, double 
 
 namespace {
 
-gg::GaugeFaults parse_faults(const std::string& spec) {
+gg::GaugeFaults parse_gauge_faults(const std::string& spec) {
     gg::GaugeFaults f;
     std::stringstream ss(spec);
     std::string item;
@@ -163,7 +168,7 @@ int run_gauge_emulate(const std::string& kind_name, const std::string& faults, s
     cfg.kind = *kind;
     cfg.seed = seed;
     cfg.rate_hz = rate_hz;
-    cfg.faults = parse_faults(faults);
+    cfg.faults = parse_gauge_faults(faults);
     if (*kind == gg::Kind::Sylvac) cfg.resolution_mm = 0.001;
     gg::GaugeEmulator emu(cfg, {}, false);
     const InterruptGuard interrupt;

@@ -22,6 +22,7 @@
 #include "ballbar/workflow/session_io.hpp"
 #include "command.hpp"
 #include "gauge_commands.hpp"
+#include "json_out.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -60,10 +61,6 @@ class GaugeDemoOperator : public acq::ScriptedOperator {
     device::SimulatedMachine& machine_;
     gg::GaugeEmulator& emu_;
 };
-
-ojson vec3(const ba::Vec3& v) {
-    return ojson::array({v.x(), v.y(), v.z()});
-}
 
 }  // namespace
 
@@ -164,7 +161,7 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
         const ba::Vec3 tr = step == 1 ? t.e1_mm : t.e2_mm;
         worst_um = std::max(worst_um, (m - tr).cwiseAbs().maxCoeff() * 1e3);
         out["locations"].push_back(
-            {{"test", test + 1}, {"step", step}, {"measured_mm", vec3(m)}, {"true_mm", vec3(tr)}});
+            {{"test", test + 1}, {"step", step}, {"e_mm", vec3_json(m)}, {"true_e_mm", vec3_json(tr)}});
     }
     for (const auto& r : sum.tests) {
         const auto& t = truth[static_cast<std::size_t>(r.test)].result.orientation.exact;
@@ -176,10 +173,10 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
         const ba::MeasuredAngles angles = acq::measured_angles(*type, r.kind);
         const double d = std::max({angles.alpha ? da : 0.0, angles.beta ? db : 0.0, angles.gamma ? dg : 0.0});
         worst_arcsec = std::max(worst_arcsec, ba::rad_to_arcsec(d));
-        out["orientation"].push_back({{"test", r.test + 1},
-                                      {"kind", std::string(acq::to_string(r.kind))},
-                                      {"measured_rad", {m->d_alpha_rad, m->d_beta_rad, m->d_gamma_rad}},
-                                      {"true_rad", {t->d_alpha_rad, t->d_beta_rad, t->d_gamma_rad}}});
+        ojson oj = {{"test", r.test + 1}, {"kind", std::string(acq::to_string(r.kind))}};
+        put_angles(oj, "", "", m, *type, r.kind);
+        put_angles(oj, "true_", "", t, *type, r.kind);
+        out["orientation"].push_back(std::move(oj));
     }
     out["max_location_error_um"] = worst_um;
     out["max_orientation_error_arcsec"] = worst_arcsec;
@@ -189,8 +186,8 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     } else {
         std::printf("\nTotal position errors (SSM exact), µm: measured | true\n");
         for (const auto& l : out["locations"]) {
-            const auto& m = l["measured_mm"];
-            const auto& t = l["true_mm"];
+            const auto& m = l["e_mm"];
+            const auto& t = l["true_e_mm"];
             std::printf("  test %d step %d   %8.3f %8.3f %8.3f | %8.3f %8.3f %8.3f\n", l["test"].get<int>(),
                         l["step"].get<int>(), 1e3 * m[0].get<double>(), 1e3 * m[1].get<double>(),
                         1e3 * m[2].get<double>(), 1e3 * t[0].get<double>(), 1e3 * t[1].get<double>(),

@@ -365,7 +365,7 @@ void JsonOperator::point_captured(const acq::CapturedPoint& p) {
     emit(out_, {{"event", "point"},
                 {"point", point_json(p.planned)},
                 {"measured_mm", p.measured_mm},
-                {"std_um", p.std_mm * 1e3},
+                {"sd_um", p.std_mm * 1e3},  // the readings' spread, not an uncertainty (docs/cli.md)
                 {"n", p.n},
                 {"operator_accepted", p.operator_accepted},
                 {"evidence", p.evidence}});

@@ -11,6 +11,7 @@
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/analysis/error_params.hpp"
 #include "ballbar/analysis/orientation.hpp"
+#include "ballbar/storage/compensation_codec.hpp"
 #include "ballbar/storage/identification_codec.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "figures.hpp"
@@ -111,29 +112,28 @@ std::vector<std::string> discovery_lines(const json& j) {
         const std::string effect = st.value("effect", "?");
         const std::string unit = st.value("unit", "");  // outlives u, which only views it
         ScreenUnit u{1, unit};
-        if (const auto p = ba::parse_param(st.value("iso", ""))) u = screen_unit(ba::param_info(*p).unit);
-        out.push_back(effect + " " +
-                      with_uncertainty(num(st, "estimate") * u.factor, num(st, "stderr") * u.factor, u.symbol) +
+        if (st.contains("iso") && st["iso"].is_string())
+            if (const auto p = ba::parse_param(st["iso"].get<std::string>())) u = screen_unit(ba::param_info(*p).unit);
+        // docs/cli.md's vocabulary (value, value_std), or as results were stored before it (estimate, stderr).
+        const bool before_vocabulary = st.contains("estimate");
+        const double v = num(st, before_vocabulary ? "estimate" : "value");
+        const double sd = num(st, before_vocabulary ? "stderr" : "value_std");
+        out.push_back(effect + " " + with_uncertainty(v * u.factor, sd * u.factor, u.symbol) +
                       (st.value("accepted", true) ? "" : " (withdrawn)"));
     }
     return out;
 }
 
-std::vector<std::string> compensation_lines(const json& j) {
-    std::vector<std::string> out;
-    if (j.contains("axes") && j["axes"].is_array()) {
-        std::string line = "RMS error before -> after:";
-        for (const auto& a : j["axes"]) {
-            char buf[96];
-            std::snprintf(buf, sizeof buf, " %s %.3f -> %.3f %s", a.value("axis", "?").c_str(), num(a, "before"),
-                          num(a, "after"), a.value("unit", "").c_str());
-            line += buf;
-        }
-        out.push_back(line);
+std::vector<std::string> compensation_lines(const std::string& payload) {
+    const storage::CompensationRecord c = storage::compensation_from_json(payload);
+    std::string line = "RMS error before -> after:";
+    for (const auto& a : c.axes) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, " %s %.3f -> %.3f µm", a.axis.c_str(), a.before_um, a.after_um);
+        line += buf;
     }
-    return out;
+    return {line};
 }
-
 std::vector<std::string> instrument_lines(const json& j) {
     char buf[200];
     std::snprintf(buf, sizeof buf, "%s %s, resolution %.4g µm, %.1f readings/s measured", j.value("maker", "").c_str(),
@@ -166,7 +166,7 @@ std::vector<std::string> result_lines(std::string_view kind, std::string_view pa
         if (kind == acq::kOrientationResultKind) return orientation_lines(payload_json, machine);
         if (kind == storage::kIdentificationResultKind) return identification_lines(payload_json);
         if (kind == "discovery") return discovery_lines(j);
-        if (kind == "compensation") return compensation_lines(j);
+        if (kind == storage::kCompensationResultKind) return compensation_lines(std::string(payload_json));
         if (kind == "instrument") return instrument_lines(j);
         if (kind == "acquisition.plan") return {};  // the plan: `sessions show --json`
         return generic_lines(j);

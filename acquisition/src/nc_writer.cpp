@@ -39,11 +39,6 @@ NcBlock comment_block(std::string text) {
     return b;
 }
 
-std::string where(const PlannedPoint& p) {
-    return "test " + std::to_string(p.test + 1) + " step " + std::to_string(p.step) + " point " +
-           std::to_string(p.point + 1);
-}
-
 std::string socket_text(const Vec3& s) {
     std::ostringstream os;
     os << "[" << s.x() << ", " << s.y() << ", " << s.z() << "] mm";
@@ -146,7 +141,7 @@ class Builder {
         const std::vector<int> digits = encode_point(index, digits_);
         std::string text;
         for (int d : digits) text += std::to_string(d);
-        comment("code of " + where(p) + ": " + text);
+        comment("code of " + point_label(p) + ": " + text);
         for (std::size_t k = 0; k < digits.size(); ++k) {
             const double off = tag_offset_mm(opt_.code, static_cast<int>(k), digits[k]);
             const Pose q = command_for_tool_ball(geom_, p.pose, p.tool_ball_mm + off * u);
@@ -160,7 +155,7 @@ class Builder {
     void measure(std::size_t index) {
         const PlannedPoint& p = plan_.points[index];
         code(index, p);
-        dwell(plan_.spec.dwell_s, where(p));
+        dwell(plan_.spec.dwell_s, point_label(p));
         pending_.point = index;
         prog_.entries.push_back(std::move(pending_));
         pending_ = {};

@@ -305,4 +305,9 @@ PlanSpec default_plan(const MachineFile& machine) {
     return s;
 }
 
+std::string point_label(const PlannedPoint& p) {
+    return "test " + std::to_string(p.test + 1) + " step " + std::to_string(p.step) + " point " +
+           std::to_string(p.point + 1);
+}
+
 }  // namespace ballbar::acquisition

@@ -12,22 +12,22 @@
 namespace ballbar::acquisition {
 namespace {
 
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 
-json vec(const analysis::Vec3& v) {
-    return json::array({v.x(), v.y(), v.z()});
+ojson vec(const analysis::Vec3& v) {
+    return ojson::array({v.x(), v.y(), v.z()});
 }
 
-json angles(const std::optional<analysis::OrientationErrors>& e) {
+ojson angles(const std::optional<analysis::OrientationErrors>& e) {
     if (!e) return nullptr;
     return {{"d_alpha_rad", e->d_alpha_rad}, {"d_beta_rad", e->d_beta_rad}, {"d_gamma_rad", e->d_gamma_rad}};
 }
 
 /// Parses one payload of `kind`; every error names the kind and the key.
-json parse(std::string_view kind, std::string_view text) {
+ojson parse(std::string_view kind, std::string_view text) {
     try {
-        return json::parse(text);
-    } catch (const json::exception& e) {
+        return ojson::parse(text);
+    } catch (const ojson::exception& e) {
         throw ResultFormatError("result \"" + std::string(kind) + "\" is not valid JSON: " + e.what());
     }
 }
@@ -37,7 +37,7 @@ auto failing(std::string_view kind) {
         throw ResultFormatError("result \"" + kind + "\"" + (key.empty() ? "" : ": \"" + key + "\"") + " " + problem);
     };
 }
-using Fields = fileio::JsonFields<json, decltype(failing(""))>;
+using Fields = fileio::JsonFields<ojson, decltype(failing(""))>;
 
 int count(const Fields& f, const char* key, int lo = 0) {
     const auto v = f.count(key, 1'000'000'000);
@@ -46,7 +46,7 @@ int count(const Fields& f, const char* key, int lo = 0) {
 }
 
 std::optional<analysis::OrientationErrors> angles(const Fields& f, const char* key) {
-    const json& v = f.at(key);
+    const ojson& v = f.at(key);
     if (v.is_null()) return std::nullopt;
     if (!v.is_object() || v.size() != 3) f.refuse(key, "must be null or {d_alpha_rad, d_beta_rad, d_gamma_rad}");
     const Fields a(v, f.path(key), f.fail());
@@ -54,7 +54,7 @@ std::optional<analysis::OrientationErrors> angles(const Fields& f, const char* k
 }
 
 TestKind test_kind(const Fields& f) {
-    const json& v = f.at("kind");
+    const ojson& v = f.at("kind");
     for (TestKind k : {TestKind::BothAxes, TestKind::SpindleBeta, TestKind::TableAlpha})
         if (v.is_string() && v.get<std::string>() == to_string(k)) return k;
     f.refuse("kind", "must be \"BothAxes\", \"SpindleBeta\" or \"TableAlpha\"");
@@ -63,7 +63,7 @@ TestKind test_kind(const Fields& f) {
 }  // namespace
 
 std::string location_to_json(const LocationResult& r) {
-    json j;
+    ojson j;
     j["test"] = r.test;
     j["step"] = r.step;
     j["datum_mm"] = vec(r.datum_mm);
@@ -72,14 +72,14 @@ std::string location_to_json(const LocationResult& r) {
     j["e_std_mm"] = vec(r.ssm.std_mm);
     j["dV_mm"] = vec(r.dV_mm);
     // +∞ for a degenerate layout: JSON has no infinity, null says it
-    j["condition_number"] = std::isfinite(r.ssm.condition_number) ? json(r.ssm.condition_number) : json(nullptr);
+    j["condition_number"] = std::isfinite(r.ssm.condition_number) ? ojson(r.ssm.condition_number) : ojson(nullptr);
     j["n"] = r.ssm.n;
     if (r.ssm.residual_rms_mm) j["residual_rms_mm"] = *r.ssm.residual_rms_mm;
     return j.dump();
 }
 
 LocationResult location_from_json(std::string_view text) {
-    const json j = parse(kSsmResultKind, text);
+    const ojson j = parse(kSsmResultKind, text);
     const Fields f(j, "", failing(kSsmResultKind));
     f.only({"test", "step", "datum_mm", "e_exact_mm", "e_linear_mm", "e_std_mm", "dV_mm", "condition_number", "n",
             "residual_rms_mm"});
@@ -102,7 +102,7 @@ LocationResult location_from_json(std::string_view text) {
 }
 
 std::string test_to_json(const TestResult& r) {
-    json j;
+    ojson j;
     j["test"] = r.test;
     j["kind"] = std::string(to_string(r.kind));
     j["dV1_mm"] = vec(r.dV1_mm);
@@ -115,7 +115,7 @@ std::string test_to_json(const TestResult& r) {
 }
 
 TestResult test_from_json(std::string_view text) {
-    const json j = parse(kOrientationResultKind, text);
+    const ojson j = parse(kOrientationResultKind, text);
     const Fields f(j, "", failing(kOrientationResultKind));
     f.only({"test", "kind", "dV1_mm", "dV2_mm", "first_order", "exact", "std", "singular"});
     TestResult r;
@@ -131,14 +131,14 @@ TestResult test_from_json(std::string_view text) {
 }
 
 std::string plan_to_json(const Plan& plan) {
-    json j;
-    j["machine"] = json::parse(write_machine_file(plan.machine));
-    j["plan"] = json::parse(write_plan_file(plan.spec, plan.machine.geometry.type));
+    ojson j;
+    j["machine"] = ojson::parse(write_machine_file(plan.machine));
+    j["plan"] = ojson::parse(write_plan_file(plan.spec, plan.machine.geometry.type));
     return j.dump();
 }
 
 Plan plan_from_json(std::string_view text) {
-    const json j = parse(kPlanResultKind, text);
+    const ojson j = parse(kPlanResultKind, text);
     const Fields f(j, "", failing(kPlanResultKind));
     f.only({"machine", "plan"});
     // The files' own readers check them (PlanError names what is wrong).

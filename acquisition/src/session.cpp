@@ -16,11 +16,6 @@ using namespace ballbar::analysis;
 
 namespace {
 
-std::string where(const PlannedPoint& p) {
-    return "test " + std::to_string(p.test + 1) + " step " + std::to_string(p.step) + " point " +
-           std::to_string(p.point + 1);
-}
-
 std::string fmt(double v, int precision = 4) {
     std::ostringstream os;
     os.setf(std::ios::fixed);
@@ -220,7 +215,7 @@ void Session::measure_missing() {
                     list += ", …";
                     break;
                 }
-                list += (k ? ", " : "") + where(plan_.points[miss[k]]);
+                list += (k ? ", " : "") + point_label(plan_.points[miss[k]]);
             }
             if (summary_.programs >= static_cast<std::size_t>(options_.max_programs))
                 end_interrupted(std::to_string(miss.size()) + " points still missing after " +
@@ -256,13 +251,14 @@ bool Session::decide_failed_points() {
         check_stop();
         const PointFailureAction a = op_.point_failed(*best_failed_[i], failure_why_[i]);
         failures_[i] = 0;
-        if (a == PointFailureAction::Abort) end(Event::Abort, where(plan_.points[i]) + " failed: " + failure_why_[i]);
+        if (a == PointFailureAction::Abort)
+            end(Event::Abort, point_label(plan_.points[i]) + " failed: " + failure_why_[i]);
         if (a == PointFailureAction::Accept) {
             CapturedPoint cp = *best_failed_[i];
             cp.operator_accepted = true;
             captured_[i] = cp;
             sink_.on_point(cp);
-            fire(Event::PointCaptured, where(cp.planned) + ": kept by the operator despite: " + failure_why_[i]);
+            fire(Event::PointCaptured, point_label(cp.planned) + ": kept by the operator despite: " + failure_why_[i]);
         }
     }
     return true;
@@ -409,11 +405,11 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
                 const std::size_t k = ev.point ? entry_of[*ev.point] : prog.entries.size();
                 if (k >= prog.entries.size()) {
                     ++summary_.void_dwells;
-                    fire(Event::PointRejected, where(plan_.points[*ev.point]) + ": " + ev.evidence +
+                    fire(Event::PointRejected, point_label(plan_.points[*ev.point]) + ": " + ev.evidence +
                                                    "; the point is not in the running program: not stored");
                 } else if (k < cursor_) {
                     ++summary_.void_dwells;
-                    fire(Event::PointRejected, where(plan_.points[*ev.point]) + ": " + ev.evidence +
+                    fire(Event::PointRejected, point_label(plan_.points[*ev.point]) + ": " + ev.evidence +
                                                    "; the program is already past that point: not stored");
                 } else {
                     on_captured(ev, k);
@@ -438,7 +434,7 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
             // Nothing attributable came in time: the entry at the cursor is lost; the next is due later.
             while (armed && t_s > deadline_s && !attributor_->measuring()) {
                 const std::size_t lost = prog.entries[cursor_].point;
-                fire(Event::PointRejected, where(plan_.points[lost]) + ": no attributable dwell by " +
+                fire(Event::PointRejected, point_label(plan_.points[lost]) + ": no attributable dwell by " +
                                                fmt(deadline_s, 1) + " s (the program's timing): missing");
                 ++cursor_;
                 if (cursor_ >= prog.entries.size()) return RunEnd::Complete;
@@ -455,7 +451,7 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
 
 void Session::on_void(const AttributionEvent& ev) {
     ++summary_.void_dwells;
-    std::string who = ev.point ? where(plan_.points[*ev.point]) + ": " : std::string("a dwell: ");
+    std::string who = ev.point ? point_label(plan_.points[*ev.point]) + ": " : std::string("a dwell: ");
     fire(Event::PointRejected, who + ev.evidence + "; not stored");
 }
 
@@ -485,7 +481,7 @@ void Session::on_captured(const AttributionEvent& ev, std::size_t /*entry*/) {
     else if (w.flagged)
         why = "samples flagged by the instrument (reference or temperature)";
     if (captured_[index]) {
-        fire(Event::PointRejected, where(planned) + ": captured already; this dwell is not stored");
+        fire(Event::PointRejected, point_label(planned) + ": captured already; this dwell is not stored");
         return;
     }
     if (!why.empty()) {
@@ -493,13 +489,13 @@ void Session::on_captured(const AttributionEvent& ev, std::size_t /*entry*/) {
         ++failures_[index];
         if (!best_failed_[index] || w.std_mm < best_failed_[index]->std_mm) best_failed_[index] = cp;
         failure_why_[index] = why;
-        fire(Event::PointRejected, where(planned) + ": " + why + " (" + ev.evidence + "); measured again later");
+        fire(Event::PointRejected, point_label(planned) + ": " + why + " (" + ev.evidence + "); measured again later");
         return;
     }
     captured_[index] = cp;
     sink_.on_point(cp);
-    fire(Event::PointCaptured, where(planned) + ": " + fmt(cp.measured_mm, 5) + " mm, std " + fmt(cp.std_mm * 1e3, 3) +
-                                   " µm, n " + std::to_string(cp.n) + "; " + ev.evidence);
+    fire(Event::PointCaptured, point_label(planned) + ": " + fmt(cp.measured_mm, 5) + " mm, std " +
+                                   fmt(cp.std_mm * 1e3, 3) + " µm, n " + std::to_string(cp.n) + "; " + ev.evidence);
     op_.point_captured(cp);
 }
 

@@ -132,7 +132,7 @@ std::string diagnostic_key(Diag diag, Plane plane) {
 const char* diagnostic_unit(Diag diag) {
     switch (diag) {
         case Diag::Squareness:
-            return "um/m";
+            return "um_per_m";
         case Diag::ScaleMismatch:
             return "ppm";
         case Diag::ServoMismatch:
@@ -141,10 +141,18 @@ const char* diagnostic_unit(Diag diag) {
         case Diag::CyclicPitchQ:
             return "mm";
         case Diag::VibrationHz:
-            return "Hz";
+            return "hz";
         default:
             return "um";
     }
+}
+
+const char* diagnostic_unit_symbol(Diag diag) {
+    const std::string_view u = diagnostic_unit(diag);
+    if (u == "um") return "µm";
+    if (u == "um_per_m") return "µm/m";
+    if (u == "hz") return "Hz";
+    return diagnostic_unit(diag);
 }
 
 double radial_um_per_unit(Diag diag, const TestSpec& test) {

@@ -440,13 +440,13 @@ std::string describe(const std::string& family, std::span<const LearnedTerm> ter
         const std::string u = l.term.unit();
         double f = 1;
         std::string shown = u;
-        if (u == "mm/h") {
+        if (u == "mm_per_h") {
             f = 1e3;
             shown = "µm/h";
-        } else if (u == "rad/h") {
+        } else if (u == "rad_per_h") {
             f = 1e6;
             shown = "µrad/h";
-        } else if (u == "mm/K") {
+        } else if (u == "mm_per_K") {
             f = 1e3;
             shown = "µm/K";
         } else if (u == "mm") {

@@ -87,14 +87,14 @@ std::string EmpiricalTerm::unit() const {
         case EmpiricalKind::tool_offset:
             return "mm";
         case EmpiricalKind::location_drift:
-            return param_info(location).unit == ParamUnit::rad ? "rad/h" : "mm/h";
+            return param_info(location).unit == ParamUnit::rad ? "rad_per_h" : "mm_per_h";
         case EmpiricalKind::pivot_drift:
-            return "mm/h";
+            return "mm_per_h";
         case EmpiricalKind::bar_temp_pivot:
         case EmpiricalKind::air_temp_pivot:
-            return "mm/K";
+            return "mm_per_K";
         case EmpiricalKind::bar_temp_quadratic:
-            return "1/K^2";
+            return "per_K2";
     }
     return {};
 }

@@ -68,11 +68,11 @@ std::string_view to_string(ParamUnit unit) {
         case rad:
             return "rad";
         case mm_per_mm:
-            return "mm/mm";
+            return "mm_per_mm";
         case mm_per_h:
-            return "mm/h";
+            return "mm_per_h";
         case per_K:
-            return "1/K";
+            return "per_K";
     }
     return "?";
 }

@@ -11,11 +11,6 @@ namespace {
 
 std::string fmt(double v, int decimals);
 
-/// Appends " <letter><value>" in fixed notation with `decimals` digits (nc_program.hpp: the text of
-/// std::to_chars at a fraction of its cost; it runs for every axis word of every output block).
-void append_number(std::string& out, char letter, double value, int decimals = 4) {
-    append_nc_number(out, letter, value, decimals);
-}
 /// An inverse-time feed (G93 F, 1/min) with up to 10 significant digits: in the F word's format only
 /// between 0.0001 and 999999.9 (no exponent, at most 6 integer digits).
 void append_general(std::string& out, char letter, double value) {
@@ -115,7 +110,7 @@ NcCompensateSummary compensate_nc_program(std::string_view text, const MachineGe
             if (inverse_time)
                 append_general(out, letter, value);
             else
-                append_number(out, letter, value, decimals);
+                append_nc_number(out, letter, value, decimals);
         } catch (const NcError&) {
             throw;
         } catch (const AnalysisError& error) {

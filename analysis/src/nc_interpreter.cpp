@@ -11,9 +11,6 @@
 namespace ballbar::analysis {
 namespace {
 
-constexpr bool is_space(char c) {
-    return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
-}
 constexpr char upper(char c) {
     return c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;
 }
@@ -21,12 +18,6 @@ constexpr bool is_letter(char c) {
     return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
 }
 constexpr double kInch = 25.4;
-
-std::string_view trim(std::string_view s) {
-    while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-    while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-    return s;
-}
 
 bool iequal(std::string_view a, std::string_view b) {
     if (a.size() != b.size()) return false;
@@ -157,7 +148,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     // Comments: ( … ) anywhere, ; to the end of the line (nc_lexer.hpp).
     std::string code_buf;
     std::string_view code = split_nc_comments(raw, line, /*semicolon_comments=*/true, code_buf, step.comment);
-    code = trim(code);
+    code = trim_nc_blanks(code);
     if (code.empty()) return;
     if (code == "%") {
         if (started_) {
@@ -171,7 +162,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     if (upper(code.front()) == 'O') {
         std::size_t i = 1;
         while (i < code.size() && code[i] >= '0' && code[i] <= '9') ++i;
-        if (opt_.dialect == NcDialect::Fanuc && i > 1 && trim(code.substr(i)).empty()) {
+        if (opt_.dialect == NcDialect::Fanuc && i > 1 && trim_nc_blanks(code.substr(i)).empty()) {
             started_ = true;  // Fanuc program number
             return;
         }
@@ -205,7 +196,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         return false;
     };
     while (i < code.size()) {
-        if (is_space(code[i])) {
+        if (is_nc_blank(code[i])) {
             ++i;
             continue;
         }
@@ -227,7 +218,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         }
         const char c = upper(code[i]);
         ++i;
-        while (i < code.size() && is_space(code[i])) ++i;
+        while (i < code.size() && is_nc_blank(code[i])) ++i;
         const double v = number(code, i, line, c);
         const std::string_view text = code.substr(word_start, i - word_start);
         if ((c == 'G' || c == 'M') && is_tcp_code(c, v)) {

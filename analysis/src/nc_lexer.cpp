@@ -11,16 +11,6 @@
 namespace ballbar::analysis {
 namespace {
 
-constexpr bool is_space(char c) {
-    return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
-}
-
-std::string_view trim(std::string_view s) {
-    while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-    while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-    return s;
-}
-
 /// "1e308" after a word letter: a number NC does not have, named as such (not as a word E).
 [[noreturn]] void exponent_number(std::string_view s, std::size_t start, std::size_t i, int line, char letter) {
     std::size_t end = i + 1;
@@ -105,11 +95,11 @@ std::string_view split_nc_comments(std::string_view raw, int line, bool semicolo
             const std::size_t close = raw.find(')', i + 1);
             if (close == std::string_view::npos) throw NcError(line, "comment opened with '(' is not closed");
             if (!comment.empty()) comment += ' ';
-            comment += trim(raw.substr(i + 1, close - i - 1));
+            comment += trim_nc_blanks(raw.substr(i + 1, close - i - 1));
             i = close;
         } else if (c == ';' && semicolon_comments) {
             if (!comment.empty()) comment += ' ';
-            comment += trim(raw.substr(i + 1));
+            comment += trim_nc_blanks(raw.substr(i + 1));
             break;
         } else {
             buffer += c;

@@ -18,18 +18,8 @@
 namespace ballbar::analysis {
 namespace {
 
-// NC text is ASCII: these are the "C" locale's classes without a library call per character.
-constexpr bool is_space(char c) {
-    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
-}
 constexpr char to_upper(char c) {
     return c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;
-}
-
-std::string_view trim(std::string_view s) {
-    while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-    while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-    return s;
 }
 
 /// Removes "( ... )" comments (both dialects) and "; ..." (LinuxCNC) from a line; returns the comment text
@@ -58,11 +48,6 @@ NcMotion motion_for_g(double g, int line) {
     char num[32];
     std::snprintf(num, sizeof num, "%g", g);
     throw NcError(line, std::string("unsupported G code G") + num + " (ballbar runs G0, G1, G4 in G90/G21)");
-}
-
-/// Axis words carry 4 decimals (1e-4 mm, 1e-4 degree).
-void append_number(std::string& out, char letter, double value, int decimals = 4) {
-    append_nc_number(out, letter, value, decimals);
 }
 
 __extension__ typedef unsigned __int128 Uint128;  // GCC and Clang; -Wpedantic knows it as an extension
@@ -220,7 +205,7 @@ bool NcReader::next(NcBlock& block) {
             block.comment = strip_comments(code, line_no, dialect);
             body = code;
         }
-        body = trim(body);
+        body = trim_nc_blanks(body);
         if (body == "%") continue;  // Fanuc tape framing
         if (!body.empty() && (body.front() == 'O' || body.front() == 'o') && dialect == NcDialect::Fanuc) {
             continue;  // program number
@@ -232,7 +217,7 @@ bool NcReader::next(NcBlock& block) {
         std::size_t i = 0;
         while (i < body.size()) {
             const char c = to_upper(body[i]);
-            if (is_space(c)) {
+            if (is_nc_blank(c)) {
                 ++i;
                 continue;
             }
@@ -355,10 +340,10 @@ void write_nc_block(std::string& out, const NcBlock& b, NcDialect dialect) {
         // framing this writer adds itself.
         std::string code = b.raw;
         strip_comments(code, b.line, dialect);
-        const std::string_view body = trim(code);
+        const std::string_view body = trim_nc_blanks(code);
         if (!body.empty()) {
             if (!is_framing(body)) {
-                out += trim(b.raw);
+                out += trim_nc_blanks(b.raw);
                 out += '\n';
             }
             return;
@@ -380,21 +365,21 @@ void write_nc_block(std::string& out, const NcBlock& b, NcDialect dialect) {
                                     " does not fit the controller's P word (0 to 99999.999 s)");
             out += "G4";
             if (fanuc)
-                append_number(out, 'P', std::round(b.dwell_s * 1000.0), 0);
+                append_nc_number(out, 'P', std::round(b.dwell_s * 1000.0), 0);
             else
-                append_number(out, 'P', b.dwell_s, 3);
+                append_nc_number(out, 'P', b.dwell_s, 3);
             break;
         case NcMotion::None:
             break;
     }
-    if (b.X_mm) append_number(out, 'X', *b.X_mm);
-    if (b.Y_mm) append_number(out, 'Y', *b.Y_mm);
-    if (b.Z_mm) append_number(out, 'Z', *b.Z_mm);
-    if (b.A_rad) append_number(out, 'A', rad_to_deg(*b.A_rad));
-    if (b.B_rad) append_number(out, 'B', rad_to_deg(*b.B_rad));
-    if (b.C_rad) append_number(out, 'C', rad_to_deg(*b.C_rad));
+    if (b.X_mm) append_nc_number(out, 'X', *b.X_mm);
+    if (b.Y_mm) append_nc_number(out, 'Y', *b.Y_mm);
+    if (b.Z_mm) append_nc_number(out, 'Z', *b.Z_mm);
+    if (b.A_rad) append_nc_number(out, 'A', rad_to_deg(*b.A_rad));
+    if (b.B_rad) append_nc_number(out, 'B', rad_to_deg(*b.B_rad));
+    if (b.C_rad) append_nc_number(out, 'C', rad_to_deg(*b.C_rad));
     if (!b.extra_words.empty()) out.append(" ").append(b.extra_words);
-    if (b.feed_mm_min && b.motion == NcMotion::Feed) append_number(out, 'F', *b.feed_mm_min, 1);
+    if (b.feed_mm_min && b.motion == NcMotion::Feed) append_nc_number(out, 'F', *b.feed_mm_min, 1);
     if (!b.comment.empty()) {
         if (out.size() > start) out += ' ';
         // Inside ( ) a comment cannot hold parentheses (a ';' comment of LinuxCNC can) nor control

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -15,8 +16,7 @@ namespace ballbar::report {
 namespace {
 
 using nlohmann::json;
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDeg = std::numbers::pi / 180.0;
 
 [[noreturn]] void bad(const std::string& key, const std::string& what) {
     throw ReportError("result \"circular\": \"" + key + "\" " + what);
@@ -139,13 +139,34 @@ void add_circular(Report& report, std::string_view, const json& p) {
         c.radial_min_um = num(*f, "min", "radial_deviation_um.");
     }
     // Diagnostics: the ranked ones in their order, each followed by its pitch or frequency, then the rest.
+    // Stored as one list ({key, unit, value, value_std, share_percent, rank}, docs/cli.md), or, before
+    // the vocabulary, as maps (diagnostics, uncertainties, shares_percent) and a ranking: the list is
+    // read into the maps' form.
+    json from_list_diags = json::object(), from_list_unc = json::object(), from_list_shares = json::object();
+    std::vector<std::string> order;
     const json* diags = find(p, "diagnostics");
     const json* unc = find(p, "uncertainties");
     const json* shares = find(p, "shares_percent");
-    std::vector<std::string> order;
-    if (const json* ranking = find(p, "ranking"); ranking && ranking->is_array())
+    if (diags && diags->is_array()) {
+        std::vector<std::pair<int, std::string>> ranked;
+        for (std::size_t i = 0; i < diags->size(); ++i) {
+            const json& d = (*diags)[i];
+            const std::string where = "diagnostics[" + std::to_string(i) + "].";
+            const std::string key = str(d, "key", where);
+            from_list_diags[key] = num(d, "value", where);
+            if (const auto u = opt_num(d, "value_std", where)) from_list_unc[key] = *u;
+            if (const auto sh = opt_num(d, "share_percent", where)) from_list_shares[key] = *sh;
+            if (const auto rk = opt_num(d, "rank", where)) ranked.emplace_back(static_cast<int>(*rk), key);
+        }
+        std::sort(ranked.begin(), ranked.end());
+        for (const auto& [rk, key] : ranked) order.push_back(key);
+        diags = &from_list_diags;
+        unc = &from_list_unc;
+        shares = &from_list_shares;
+    } else if (const json* ranking = find(p, "ranking"); ranking && ranking->is_array()) {
         for (const auto& k : *ranking)
             if (k.is_string()) order.push_back(k.get<std::string>());
+    }
     auto companion = [](const std::string& key) -> std::string {
         if (key.rfind("cyclic_error_", 0) == 0) return "cyclic_pitch_" + key.substr(13, 1) + "_mm";
         if (key == "vibration_um") return "vibration_hz";
@@ -181,18 +202,25 @@ void add_circular(Report& report, std::string_view, const json& p) {
                 for (const auto& k : *ks)
                     if (k.is_string()) u.keys.push_back(k.get<std::string>());
             u.reason = str(g, "reason", "unseparable.");
-            if (const json* comb = find(g, "combined")) {
+            if (const json* comb = find(g, "combined")) {  // before the vocabulary
                 u.combined_key = str(*comb, "as", "unseparable.combined.");
                 u.combined_value = opt_num(*comb, "value", "unseparable.combined.");
                 u.combined_uncertainty = opt_num(*comb, "std_uncertainty", "unseparable.combined.");
+            } else if (find(g, "combined_key")) {
+                u.combined_key = str(g, "combined_key", "unseparable.");
+                u.combined_value = opt_num(g, "combined_value", "unseparable.");
+                u.combined_uncertainty = opt_num(g, "combined_value_std", "unseparable.");
             }
             c.unseparable.push_back(std::move(u));
         }
     }
     c.residual_rms_um = opt_num(p, "residual_rms_um");
-    if (const json* m = find(p, "mean_radius_um")) {
+    if (const json* m = find(p, "mean_radius_um"); m && m->is_object()) {  // before the vocabulary
         c.mean_radius_um = opt_num(*m, "value", "mean_radius_um.");
         c.mean_radius_uncertainty_um = opt_num(*m, "std_uncertainty", "mean_radius_um.");
+    } else {
+        c.mean_radius_um = opt_num(p, "mean_radius_um");
+        c.mean_radius_uncertainty_um = opt_num(p, "mean_radius_um_std");
     }
     if (const json* cond = find(p, "conditions")) {
         c.sample_rate_hz = opt_num(*cond, "sample_rate_hz", "conditions.");

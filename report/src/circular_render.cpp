@@ -3,6 +3,7 @@
 // the runs (deviation magnified, with its scale and the tolerance band), the ranked diagnostics and the
 // effects this data cannot separate.
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,7 +16,6 @@ namespace ballbar::report {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 const Rgb kPass{0.0, 0.55, 0.25};
 const Rgb kFail{0.80, 0.10, 0.10};
 
@@ -144,7 +144,7 @@ void polar_plot(Document& doc, const CircularTest& c) {
     const double rho0 = 0.6 * rmax, gain = 0.38 * rmax / d;  // points per µm
     auto rho = [&](double dev) { return std::max(rho0 + gain * dev, 0.0); };
     auto at = [&](double deg, double rad_pt) {
-        const double a = deg * kPi / 180.0;
+        const double a = deg * std::numbers::pi / 180.0;
         return std::pair<double, double>{cx + rad_pt * std::cos(a), cy - rad_pt * std::sin(a)};
     };
     cairo_save(cr);
@@ -152,9 +152,9 @@ void polar_plot(Document& doc, const CircularTest& c) {
     if (c.tolerance_um) {
         set_color(cr, kPass, 0.18);
         cairo_new_path(cr);
-        cairo_arc(cr, cx, cy, rho(0.5 * *c.tolerance_um), 0, 2 * kPi);
+        cairo_arc(cr, cx, cy, rho(0.5 * *c.tolerance_um), 0, 2 * std::numbers::pi);
         cairo_new_sub_path(cr);
-        cairo_arc_negative(cr, cx, cy, rho(-0.5 * *c.tolerance_um), 2 * kPi, 0);
+        cairo_arc_negative(cr, cx, cy, rho(-0.5 * *c.tolerance_um), 2 * std::numbers::pi, 0);
         cairo_fill(cr);
     }
     // Rings every d/2 from −d to +d; the least-squares circle (0) solid.
@@ -167,7 +167,7 @@ void polar_plot(Document& doc, const CircularTest& c) {
             cairo_set_dash(cr, dash, 2, 0);
         }
         cairo_new_path(cr);
-        cairo_arc(cr, cx, cy, rho(dev), 0, 2 * kPi);
+        cairo_arc(cr, cx, cy, rho(dev), 0, 2 * std::numbers::pi);
         cairo_stroke(cr);
         cairo_set_dash(cr, nullptr, 0, 0);
     }
@@ -185,9 +185,9 @@ void polar_plot(Document& doc, const CircularTest& c) {
         std::string label = std::to_string(a) + "°";
         if (a == 0) label += " +" + axis_letters(c.plane, 0);
         if (a == 90) label += " +" + axis_letters(c.plane, 1);
-        const HAlign h = std::abs(std::cos(a * kPi / 180)) < 0.2 ? HAlign::Center
-                         : std::cos(a * kPi / 180) > 0           ? HAlign::Left
-                                                                 : HAlign::Right;
+        const HAlign h = std::abs(std::cos(a * std::numbers::pi / 180)) < 0.2 ? HAlign::Center
+                         : std::cos(a * std::numbers::pi / 180) > 0           ? HAlign::Left
+                                                                              : HAlign::Right;
         set_color(cr, kGrey);
         draw_text(cr, tx, ty, label, h, VAlign::Middle);
     }

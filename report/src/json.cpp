@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
-// The report as data: schema "ballbar-report/1" (docs/report.md). Angles are given in radians,
-// degrees and arcseconds so that no reader converts; absent values are null.
+// The report as data: schema "ballbar-report/2" (docs/report.md), in docs/cli.md's JSON vocabulary:
+// units in the keys (angles in radians and arcseconds, so that no reader converts), an uncertainty as
+// K_std next to K, an item's unit in `unit` where a list mixes them, absent values null.
 #include <cmath>
 
 #include "ballbar/analysis/types.hpp"
@@ -21,9 +22,29 @@ json num(double v) {
 json vec(const Vec3& v) {
     return json::array({num(v.x()), num(v.y()), num(v.z())});
 }
-json angle(const std::optional<double>& rad) {
-    if (!rad || !std::isfinite(*rad)) return nullptr;
-    return {{"rad", *rad}, {"deg", analysis::rad_to_deg(*rad)}, {"arcsec", analysis::rad_to_arcsec(*rad)}};
+/// `name`_rad, _deg and _arcsec (+ `suffix`) of an angle into `out` (null when it is absent).
+void put_angle(json& out, const std::string& name, const std::optional<double>& rad, const std::string& suffix = "") {
+    const bool known = rad && std::isfinite(*rad);
+    out[name + "_rad" + suffix] = known ? json(*rad) : json(nullptr);
+    out[name + "_deg" + suffix] = known ? json(analysis::rad_to_deg(*rad)) : json(nullptr);
+    out[name + "_arcsec" + suffix] = known ? json(analysis::rad_to_arcsec(*rad)) : json(nullptr);
+}
+/// A text, or null when empty.
+json text(const std::string& s) {
+    return s.empty() ? json(nullptr) : json(s);
+}
+/// A count the model holds as an optional double.
+json count(const std::optional<double>& v) {
+    return v && std::isfinite(*v) ? json(static_cast<long long>(std::llround(*v))) : json(nullptr);
+}
+/// The report's screen units (µm, µm/m, °, …) as docs/cli.md's unit names (um, um_per_m, deg, …).
+std::string unit_name(const std::string& screen) {
+    static const std::pair<const char*, const char*> names[] = {
+        {"µm", "um"}, {"µm/m", "um_per_m"}, {"µm/h", "um_per_h"},     {"ppm/K", "ppm_per_K"}, {"°", "deg"},
+        {"Hz", "hz"}, {"µrad", "urad"},     {"µrad/h", "urad_per_h"}, {"µm/K", "um_per_K"}};
+    for (const auto& [from, to] : names)
+        if (screen == from) return to;
+    return screen;
 }
 json range(const Range& r) {
     if (!r.present()) return nullptr;
@@ -42,22 +63,22 @@ json header(const Header& h) {
     if (m.type != analysis::MachineType::RRTTT) machine["a_pivot_mm"] = vec(m.a_pivot_mm);
     if (m.type == analysis::MachineType::TTTRR) machine["c_offset_mm"] = vec(m.c_offset_mm);
     return {{"session_id", h.session_id},
-            {"session_name", h.session_name},
+            {"session_name", text(h.session_name)},
             {"status", h.status},
-            {"started_at", h.started_at},
-            {"finished_at", h.finished_at},
+            {"started_at", text(h.started_at)},
+            {"finished_at", text(h.finished_at)},
             {"machine", machine},
             {"instrument",
-             {{"model", h.instrument_model},
-              {"serial", h.instrument_serial},
-              {"firmware", h.instrument_firmware},
-              {"calibration_date", h.instrument_calibration_date},
+             {{"model", text(h.instrument_model)},
+              {"serial", text(h.instrument_serial)},
+              {"firmware", text(h.instrument_firmware)},
+              {"calibration_date", text(h.instrument_calibration_date)},
               {"calibrated_length_mm", opt(h.calibrated_length_mm)}}},
-            {"operator", h.operator_name},
+            {"operator", text(h.operator_name)},
             {"temperatures_C",
              {{"bar", range(h.bar_temp_C)}, {"machine", range(h.machine_temp_C)}, {"air", range(h.air_temp_C)}}},
-            {"software_version", h.software_version},
-            {"notes", h.notes}};
+            {"software_version", text(h.software_version)},
+            {"notes", text(h.notes)}};
 }
 
 json circular(const Report& r) {
@@ -75,18 +96,18 @@ json circular(const Report& r) {
                {"feed_in_lag_ms", opt(run.feed_in_lag_ms)},
                {"data_start_s", opt(run.data_start_s)},
                {"data_end_s", opt(run.data_end_s)},
-               {"samples", opt(run.samples)},
+               {"samples", count(run.samples)},
                {"polar", {{"angle_deg", nums(run.angle_deg)}, {"deviation_um", nums(run.deviation_um)}}}};
-        if (c.tolerance_um) j["pass"] = run.circularity_um <= *c.tolerance_um;
+        j["pass"] = c.tolerance_um ? json(run.circularity_um <= *c.tolerance_um) : json(nullptr);
         runs.push_back(j);
     }
     json diags = json::array();
     for (const auto& d : c.diagnostics)
         diags.push_back({{"key", d.key},
                          {"name", d.name},
-                         {"unit", d.unit},
+                         {"unit", unit_name(d.unit)},
                          {"value", num(d.value)},
-                         {"uncertainty", opt(d.uncertainty)},
+                         {"value_std", opt(d.uncertainty)},
                          {"share_percent", opt(d.share_percent)},
                          {"rank", d.rank > 0 ? json(d.rank) : json(nullptr)}});
     json groups = json::array();
@@ -95,75 +116,80 @@ json circular(const Report& r) {
                           {"reason", g.reason},
                           {"combined_key", g.combined_key.empty() ? json(nullptr) : json(g.combined_key)},
                           {"combined_value", opt(g.combined_value)},
-                          {"combined_uncertainty", opt(g.combined_uncertainty)}});
+                          {"combined_value_std", opt(g.combined_uncertainty)}});
     json tolerance = nullptr;
     if (c.tolerance_um) {
         tolerance = {{"circularity_um", *c.tolerance_um}, {"source", c.tolerance_source}, {"pass", c.pass()}};
-        if (c.bidirectional_um) tolerance["bidirectional_pass"] = *c.bidirectional_um <= *c.tolerance_um;
+        tolerance["bidirectional_pass"] =
+            c.bidirectional_um ? json(*c.bidirectional_um <= *c.tolerance_um) : json(nullptr);
     }
-    return {
-        {"source", c.source},
-        {"conditions",
-         {{"plane", c.plane},
-          {"radius_mm", num(c.radius_mm)},
-          {"feed_mm_min", num(c.feed_mm_min)},
-          {"feed_in_mm", num(c.feed_in_mm)},
-          {"centre_mm", vec(c.centre_mm)},
-          {"sample_rate_hz", opt(c.sample_rate_hz)},
-          {"samples_used", opt(c.samples_used)},
-          {"bar_temp_C", range(c.bar_temp_C)},
-          {"air_temp_C", range(c.air_temp_C)},
-          {"instrument", c.instrument}}},
-        {"runs", runs},
-        {"bidirectional_circularity_um", opt(c.bidirectional_um)},
-        {"radial_deviation_um", {{"max", num(c.radial_max_um)}, {"min", num(c.radial_min_um)}}},
-        {"tolerance", tolerance},
-        {"diagnostics", diags},
-        {"not_detected", c.not_detected},
-        {"unseparable", groups},
-        {"residual_rms_um", opt(c.residual_rms_um)},
-        {"mean_radius_um", {{"value", opt(c.mean_radius_um)}, {"std_uncertainty", opt(c.mean_radius_uncertainty_um)}}},
-        {"polar_plot",
-         {{"deviation_um_at_outer_ring", num(c.plot_deviation_um)},
-          {"reference", "one least-squares circle for all runs (centre and radius removed)"},
-          {"decimation", "first/min/max/last per angle column"}}}};
+    // The instrument as the trace gave it: its JSON object, or null.
+    json instrument = c.instrument.empty() ? json(nullptr) : json::parse(c.instrument, nullptr, false);
+    if (instrument.is_discarded()) instrument = c.instrument;
+    return {{"source", c.source},
+            {"conditions",
+             {{"plane", c.plane},
+              {"radius_mm", num(c.radius_mm)},
+              {"feed_mm_min", num(c.feed_mm_min)},
+              {"feed_in_mm", num(c.feed_in_mm)},
+              {"centre_mm", vec(c.centre_mm)},
+              {"sample_rate_hz", opt(c.sample_rate_hz)},
+              {"samples_used", count(c.samples_used)},
+              {"bar_temp_C", range(c.bar_temp_C)},
+              {"air_temp_C", range(c.air_temp_C)},
+              {"instrument", instrument}}},
+            {"runs", runs},
+            {"bidirectional_circularity_um", opt(c.bidirectional_um)},
+            {"radial_deviation_um", {{"max", num(c.radial_max_um)}, {"min", num(c.radial_min_um)}}},
+            {"tolerance", tolerance},
+            {"diagnostics", diags},
+            {"not_detected", c.not_detected},
+            {"unseparable", groups},
+            {"residual_rms_um", opt(c.residual_rms_um)},
+            {"mean_radius_um", opt(c.mean_radius_um)},
+            {"mean_radius_um_std", opt(c.mean_radius_uncertainty_um)},
+            {"polar_plot",
+             {{"deviation_um_at_outer_ring", num(c.plot_deviation_um)},
+              {"reference", "one least-squares circle for all runs (centre and radius removed)"},
+              {"decimation", "first/min/max/last per angle column"}}}};
 }
 
 }  // namespace
 
 nlohmann::json to_json(const Report& r) {
-    json j{{"schema", "ballbar-report/1"}, {"header", header(r.header)}};
+    json j{{"schema", "ballbar-report/2"}, {"header", header(r.header)}};
 
     json& proc = j["procedure"] = json::array();
     for (const auto& e : r.procedure)
         proc.push_back({{"time_s", num(e.time_s)},
-                        {"timestamp", e.timestamp},
+                        {"at", text(e.timestamp)},
                         {"kind", e.kind},
                         {"step", e.step},
-                        {"detail", e.detail}});
+                        {"detail", text(e.detail)}});
 
     json& locs = j["locations"] = json::array();
     for (const auto& l : r.locations)
         locs.push_back({{"location", l.location},
                         {"label", l.label},
                         {"position_mm", vec(l.position_mm)},
-                        {"error_um", vec(l.error_um)},
-                        {"uncertainty_um", vec(l.uncertainty_um)},
+                        {"dV_um", vec(l.error_um)},
+                        {"dV_um_std", vec(l.uncertainty_um)},
                         {"magnitude_um", num(l.error_um.norm())},
                         {"points", l.points},
                         {"residual_rms_um", opt(l.residual_rms_um)},
-                        {"condition", opt(l.condition)}});
+                        {"condition_number", opt(l.condition)}});
 
     json& ori = j["orientation"] = json::array();
-    for (const auto& o : r.orientation)
-        ori.push_back({{"symbol", o.symbol},
-                       {"axis", o.axis},
-                       {"commanded", angle(o.commanded_rad)},
-                       {"first_order", angle(o.first_order_rad)},
-                       {"exact", angle(o.exact_rad)},
-                       {"uncertainty", angle(o.uncertainty_rad)},
-                       {"from_location", o.from_location},
-                       {"to_location", o.to_location}});
+    for (const auto& o : r.orientation) {
+        json e{{"angle", o.symbol == "Δα" ? "d_alpha" : o.symbol == "Δβ" ? "d_beta" : "d_gamma"}, {"axis", o.axis}};
+        put_angle(e, "commanded", o.commanded_rad);
+        put_angle(e, "first_order", o.first_order_rad);
+        put_angle(e, "exact", o.exact_rad);
+        put_angle(e, "exact", o.uncertainty_rad, "_std");
+        e["from_location"] = o.from_location;
+        e["to_location"] = o.to_location;
+        ori.push_back(std::move(e));
+    }
 
     j["bar_trace"] = {{"samples", r.trace.samples},     {"gaps", r.trace.gaps},
                       {"gap_s", r.trace.gap_s},         {"min_um", opt(r.trace.min_um)},
@@ -183,18 +209,18 @@ nlohmann::json to_json(const Report& r) {
         json params = json::array();
         for (const auto& p : m.parameters)
             params.push_back({{"name", p.name},
-                              {"unit", p.unit},
+                              {"unit", unit_name(p.unit)},
                               {"value", num(p.value)},
-                              {"uncertainty", opt(p.uncertainty)},
+                              {"value_std", opt(p.uncertainty)},
                               {"observability", opt(p.observability)},
-                              {"note", p.note}});
+                              {"note", text(p.note)}});
         j["model"] = {{"name", m.name},
                       {"parameters", params},
                       {"converged", m.converged ? json(*m.converged) : json(nullptr)},
                       {"iterations", m.iterations ? json(*m.iterations) : json(nullptr)},
                       {"residual_rms_before_um", opt(m.residual_rms_before_um)},
                       {"residual_rms_after_um", opt(m.residual_rms_after_um)},
-                      {"condition", opt(m.condition)}};
+                      {"condition_number", opt(m.condition)}};
     } else {
         j["model"] = nullptr;
     }
@@ -203,7 +229,7 @@ nlohmann::json to_json(const Report& r) {
     for (const auto& s : r.discovery)
         disc.push_back({{"effect", s.effect},
                         {"variable", s.variable},
-                        {"variable_unit", s.variable_unit},
+                        {"variable_unit", text(unit_name(s.variable_unit))},
                         {"x", nums(s.x)},
                         {"before_um", nums(s.before_um)},
                         {"after_um", nums(s.after_um)},
@@ -212,14 +238,15 @@ nlohmann::json to_json(const Report& r) {
                         {"accepted", s.accepted ? json(*s.accepted) : json(nullptr)},
                         {"binned", s.binned},
                         {"own_step", s.own_step},
-                        {"note", s.note}});
+                        {"note", text(s.note)}});
 
     json comp = json::array();
     for (const auto& c : r.compensation)
-        comp.push_back({{"axis", c.axis}, {"unit", c.unit}, {"before", num(c.before)}, {"after", num(c.after)}});
-    j["compensation"] = {{"metric", r.compensation_metric}, {"axes", comp}};
+        comp.push_back({{"axis", c.axis}, {"before_um", num(c.before)}, {"after_um", num(c.after)}});
+    j["compensation"] =
+        r.compensation.empty() ? json(nullptr) : json{{"metric", text(r.compensation_metric)}, {"axes", comp}};
     j["circular"] = circular(r);
-    if (!r.circular_note.empty()) j["circular_note"] = r.circular_note;
+    j["circular_note"] = text(r.circular_note);
     return j;
 }
 

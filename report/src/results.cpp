@@ -9,6 +9,7 @@
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/types.hpp"
+#include "ballbar/storage/compensation_codec.hpp"
 #include "ballbar/storage/identification_codec.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "circular.hpp"
@@ -240,11 +241,14 @@ void add_discovery(Report& r, std::string_view kind, const json& p) {
         d.note = opt_str(kind, s, "note");
         if (d.note.empty()) d.note = opt_str(kind, s, "where");
         if (opt_str(kind, s, "kind") == "empirical") d.effect += " (learned)";
-        if (d.note.empty() && find(s, "estimate")) {
+        // docs/cli.md's vocabulary (value, value_std), or as results were stored before it (estimate, stderr).
+        const bool before_vocabulary = find(s, "estimate") != nullptr;
+        if (d.note.empty() && opt_str(kind, s, "kind") != "empirical" && (before_vocabulary || find(s, "value"))) {
             const auto [factor, unit] = display_unit(opt_str(kind, s, "unit"));
             char buf[96];
-            std::snprintf(buf, sizeof buf, "%.4g ± %.2g %s", num(kind, s, "estimate") * factor,
-                          opt_num(kind, s, "stderr").value_or(0) * factor, unit.c_str());
+            std::snprintf(
+                buf, sizeof buf, "%.4g ± %.2g %s", num(kind, s, before_vocabulary ? "estimate" : "value") * factor,
+                opt_num(kind, s, before_vocabulary ? "stderr" : "value_std").value_or(0) * factor, unit.c_str());
             d.note = buf;
         }
         r.discovery.push_back(d);
@@ -279,13 +283,15 @@ void add_discovery(Report& r, std::string_view kind, const json& p) {
         r.discovery_notes.push_back("Unexplained structure not located: " + u + ".");
 }
 
-void add_compensation(Report& r, std::string_view kind, const json& p) {
-    r.compensation_metric = opt_str(kind, p, "metric");
-    const json* axes = find(p, "axes");
-    if (!axes || !axes->is_array()) bad(kind, "axes", "must be an array");
-    for (const auto& a : *axes)
-        r.compensation.push_back(
-            {opt_str(kind, a, "axis"), opt_str(kind, a, "unit"), num(kind, a, "before"), num(kind, a, "after")});
+void add_compensation(Report& r, const json& p) {
+    storage::CompensationRecord c;
+    try {
+        c = storage::compensation_from_json(p.dump());
+    } catch (const storage::FormatError& e) {
+        throw ReportError(e.what());
+    }
+    r.compensation_metric = c.metric;
+    for (const auto& a : c.axes) r.compensation.push_back({a.axis, "µm", a.before_um, a.after_um});
 }
 
 void add_procedure(Report& r, std::string_view kind, const json& p) {
@@ -318,7 +324,7 @@ bool add_known_result(Report& report, std::string_view kind, const nlohmann::jso
     else if (kind == "discovery")
         add_discovery(report, kind, payload);
     else if (kind == "compensation")
-        add_compensation(report, kind, payload);
+        add_compensation(report, payload);
     else if (kind == "procedure" || kind == "acquisition.transition")
         add_procedure(report, kind, payload);
     else

@@ -10,14 +10,14 @@ namespace ballbar::storage {
 
 namespace {
 namespace circ = analysis::circular;
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 }  // namespace
 
 std::string circular_result_json(const circ::CircularResult& r, const TraceFile& trace,
                                  std::optional<double> tolerance_um) {
-    json j;
-    j["test"] = json::parse(test_json(r.test));
-    json runs = json::array();
+    ojson j;
+    j["test"] = ojson::parse(test_json(r.test));
+    ojson runs = ojson::array();
     for (const auto& run : r.runs)
         runs.push_back({{"direction", circ::direction_name(run.direction)},
                         {"circularity_um", run.circularity_um},
@@ -28,52 +28,55 @@ std::string circular_result_json(const circ::CircularResult& r, const TraceFile&
                         {"data_end_s", run.data_end_s},
                         {"samples", run.last_sample - run.first_sample}});
     j["runs"] = runs;
-    j["bidirectional_circularity_um"] = r.bidirectional_um ? json(*r.bidirectional_um) : json(nullptr);
+    j["bidirectional_circularity_um"] = r.bidirectional_um ? ojson(*r.bidirectional_um) : ojson(nullptr);
     j["radial_deviation_um"] = {{"max", r.radial_max_um}, {"min", r.radial_min_um}};
-    json diags = json::object(), unc = json::object(), share = json::object(), ranking = json::array(),
-         missing = json::array();
-    for (const auto& d : r.diagnostics) {
-        if (!d.detected) {
-            missing.push_back(d.key);
-            continue;
+    // docs/cli.md's vocabulary: the detected diagnostics one list, ranked first by their share of the
+    // circular deviation; each with its unit, value and standard uncertainty.
+    ojson diags = ojson::array(), missing = ojson::array();
+    int rank = 0;
+    for (const bool ranked : {true, false})
+        for (const auto& d : r.diagnostics) {
+            if (!d.detected || (d.contribution_um > 0.0) != ranked) continue;
+            diags.push_back({{"key", d.key},
+                             {"unit", circ::diagnostic_unit(d.diag)},
+                             {"value", d.value},
+                             {"value_std", d.std_uncertainty},
+                             {"share_percent", ranked ? ojson(d.share_percent) : ojson(nullptr)},
+                             {"rank", ranked ? ojson(++rank) : ojson(nullptr)}});
         }
-        diags[d.key] = d.value;
-        unc[d.key] = d.std_uncertainty;
-        if (d.contribution_um > 0.0) {
-            share[d.key] = d.share_percent;
-            ranking.push_back(d.key);
-        }
-    }
+    for (const auto& d : r.diagnostics)
+        if (!d.detected) missing.push_back(d.key);
     j["diagnostics"] = diags;
-    j["uncertainties"] = unc;
-    j["shares_percent"] = share;
-    j["ranking"] = ranking;
     j["not_detected"] = missing;
-    json groups = json::array();
+    ojson groups = ojson::array();
     for (const auto& g : r.unseparable) {
-        json e = {{"keys", g.keys}, {"reason", g.reason}};
-        if (!g.combined_key.empty())
-            e["combined"] = {{"as", g.combined_key}, {"value", g.combined_value}, {"std_uncertainty", g.combined_std}};
-        groups.push_back(e);
+        const bool combined = !g.combined_key.empty();
+        groups.push_back({{"keys", g.keys},
+                          {"reason", g.reason},
+                          {"combined_key", combined ? ojson(g.combined_key) : ojson(nullptr)},
+                          {"combined_value", combined ? ojson(g.combined_value) : ojson(nullptr)},
+                          {"combined_value_std", combined ? ojson(g.combined_std) : ojson(nullptr)}});
     }
     j["unseparable"] = groups;
     j["residual_rms_um"] = r.residual_rms_um;
-    j["mean_radius_um"] = {{"value", r.mean_radius_um}, {"std_uncertainty", r.mean_radius_std_um}};
-    json cond = {{"plane", circ::plane_name(r.test.plane)},
-                 {"radius_mm", r.test.radius_mm},
-                 {"feed_mm_min", r.test.feed_mm_min},
-                 {"sample_rate_hz", r.sample_rate_hz},
-                 {"samples_used", r.samples_used}};
-    auto range = [](const std::vector<std::optional<double>>& v) -> json {
+    j["mean_radius_um"] = r.mean_radius_um;
+    j["mean_radius_um_std"] = r.mean_radius_std_um;
+    ojson cond = {{"plane", circ::plane_name(r.test.plane)},
+                  {"radius_mm", r.test.radius_mm},
+                  {"feed_mm_min", r.test.feed_mm_min},
+                  {"sample_rate_hz", r.sample_rate_hz},
+                  {"samples_used", r.samples_used}};
+    auto range = [](const std::vector<std::optional<double>>& v) -> ojson {
         double lo = 1e300, hi = -1e300;
         for (const auto& x : v)
             if (x) lo = std::min(lo, *x), hi = std::max(hi, *x);
-        return lo <= hi ? json{{"min", lo}, {"max", hi}} : json(nullptr);
+        return lo <= hi ? ojson{{"min", lo}, {"max", hi}} : ojson(nullptr);
     };
     cond["bar_temp_C"] = range(trace.bar_temp_C);
     cond["air_temp_C"] = range(trace.air_temp_C);
-    cond["instrument"] = trace.instrument_json.empty() ? json(nullptr) : json::parse(trace.instrument_json);
+    cond["instrument"] = trace.instrument_json.empty() ? ojson(nullptr) : ojson::parse(trace.instrument_json);
     j["conditions"] = cond;
+    j["tolerance"] = nullptr;
     if (tolerance_um) {
         bool pass = true;
         for (const auto& run : r.runs) pass = pass && run.circularity_um <= *tolerance_um;

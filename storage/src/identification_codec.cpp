@@ -13,12 +13,12 @@ namespace ballbar::storage {
 namespace {
 
 namespace ba = ballbar::analysis;
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 
 [[noreturn]] void bad(const std::string& key, const std::string& what) {
     throw FormatError("result \"identification\"" + (key.empty() ? "" : ": \"" + key + "\"") + " " + what);
 }
-using Fields = fileio::JsonFields<json, decltype(&bad)>;
+using Fields = fileio::JsonFields<ojson, decltype(&bad)>;
 
 /// A number; null (what nlohmann writes for NaN and ±∞) reads as NaN.
 double number_or_nan(const Fields& f, const char* key) {
@@ -31,10 +31,10 @@ int count(const Fields& f, const char* key) {
 }  // namespace
 
 std::string identification_to_json(const ba::FitSummary& fit, const ErrorModel& model) {
-    json j;
+    ojson j;
     j["converged"] = fit.converged;
     j["iterations"] = fit.iterations;
-    j["message"] = fit.message;
+    j["message"] = fit.message.empty() ? ojson(nullptr) : ojson(fit.message);
     j["readings"] = fit.readings;
     j["degrees_of_freedom"] = fit.degrees_of_freedom;
     j["residual_rms_um"] = fit.residual_rms_mm * 1e3;
@@ -42,33 +42,33 @@ std::string identification_to_json(const ba::FitSummary& fit, const ErrorModel& 
     j["noise_floor_um"] = fit.noise_floor_mm * 1e3;
     j["uncertainty_from_noise_floor"] = fit.uncertainty_from_floor;
     j["initial_rms_um"] = fit.initial_rms_mm * 1e3;
-    j["estimates"] = json::array();
+    j["estimates"] = ojson::array();
     for (const auto& e : fit.estimates)
         j["estimates"].push_back(
             {{"name", e.name},
-             {"estimate", e.estimate},
-             {"std", e.std},
+             {"unit", e.param ? std::string(ba::to_string(ba::param_info(*e.param).unit)) : std::string("mm")},
+             {"value", e.estimate},
+             {"value_std", e.std},
              {"sensitivity", e.sensitivity},
              {"independence", e.independence},
-             {"observable", e.observable},
-             {"unit", e.param ? std::string(ba::to_string(ba::param_info(*e.param).unit)) : std::string("mm")}});
-    j["correlation"] = json::array();
+             {"observable", e.observable}});
+    j["correlation"] = ojson::array();
     for (Eigen::Index r = 0; r < fit.correlation.rows(); ++r) {
-        json row = json::array();
+        ojson row = ojson::array();
         for (Eigen::Index c = 0; c < fit.correlation.cols(); ++c) row.push_back(fit.correlation(r, c));
         j["correlation"].push_back(row);
     }
-    j["correlation_names"] = json::array();
+    j["correlation_names"] = ojson::array();
     for (std::size_t i : fit.fitted) j["correlation_names"].push_back(fit.estimates[i].name);
-    j["model"] = json::parse(model_to_json(model));
+    j["model"] = ojson::parse(model_to_json(model));
     return j.dump();
 }
 
 IdentificationRecord identification_from_json(std::string_view text_in) {
-    json j;
+    ojson j;
     try {
-        j = json::parse(text_in);
-    } catch (const json::exception& e) {
+        j = ojson::parse(text_in);
+    } catch (const ojson::exception& e) {
         throw FormatError(std::string("result \"identification\" is not valid JSON: ") + e.what());
     }
     const Fields f(j, "", &bad);
@@ -80,7 +80,7 @@ IdentificationRecord identification_from_json(std::string_view text_in) {
     r.residual_rms_um = f.number("residual_rms_um");
     (void)f.at("estimates");
     if (f.has("iterations")) r.iterations = count(f, "iterations");
-    if (f.has("message")) r.message = f.text("message");
+    if (f.has("message") && !f.at("message").is_null()) r.message = f.text("message");
     if (f.has("readings")) r.readings = count(f, "readings");
     if (f.has("degrees_of_freedom")) r.degrees_of_freedom = count(f, "degrees_of_freedom");
     if (f.has("residual_sigma_um")) r.residual_sigma_um = f.number("residual_sigma_um");
@@ -91,11 +91,16 @@ IdentificationRecord identification_from_json(std::string_view text_in) {
     if (!f.at("estimates").is_array()) bad("estimates", "must be an array");
     for (std::size_t i = 0; i < j["estimates"].size(); ++i) {
         const Fields e(j["estimates"][i], "estimates[" + std::to_string(i) + "]", &bad);
-        e.only({"name", "estimate", "std", "sensitivity", "independence", "observable", "unit"});
+        // docs/cli.md's vocabulary (value, value_std), or as results were stored before it (estimate, std).
+        const bool before_vocabulary = e.has("estimate");
+        if (before_vocabulary)
+            e.only({"name", "estimate", "std", "sensitivity", "independence", "observable", "unit"});
+        else
+            e.only({"name", "unit", "value", "value_std", "sensitivity", "independence", "observable"});
         IdentifiedEstimate x;
         x.name = e.text("name");
-        x.estimate = e.number("estimate");
-        x.std = number_or_nan(e, "std");
+        x.estimate = e.number(before_vocabulary ? "estimate" : "value");
+        x.std = number_or_nan(e, before_vocabulary ? "std" : "value_std");
         if (e.has("sensitivity")) x.sensitivity = number_or_nan(e, "sensitivity");
         if (e.has("independence")) x.independence = number_or_nan(e, "independence");
         x.observable = e.boolean("observable");
@@ -110,7 +115,7 @@ IdentificationRecord identification_from_json(std::string_view text_in) {
         }
     }
     if (f.has("correlation")) {
-        const json& c = j["correlation"];
+        const ojson& c = j["correlation"];
         if (!c.is_array() || c.size() != r.correlation_names.size())
             bad("correlation", "must be a square matrix over correlation_names");
         for (const auto& row : c) {

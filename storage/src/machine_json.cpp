@@ -5,12 +5,13 @@
 #include <nlohmann/json.hpp>
 
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/fileio/json_fields.hpp"
 
 namespace ballbar::storage {
 namespace {
 
 using analysis::MachineType;
-using json = nlohmann::ordered_json;  // keeps the key order of what we read and write
+using ojson = nlohmann::ordered_json;  // keeps the key order of what we read and write
 
 bool uses(MachineType type, std::string_view key) {
     if (key == "tool_ball_mm") return true;
@@ -21,7 +22,7 @@ bool uses(MachineType type, std::string_view key) {
 
 constexpr std::string_view kGeometryKeys[] = {"tool_ball_mm", "a_pivot_mm", "c_offset_mm"};
 
-analysis::Vec3 vec_from(const json& j, std::string_view key) {
+analysis::Vec3 vec_from(const ojson& j, std::string_view key) {
     const std::string where = "machine." + std::string(key);
     if (!j.is_array() || j.size() != 3) throw FormatError(where + " must be an array of 3 numbers (mm)");
     analysis::Vec3 v;
@@ -37,15 +38,11 @@ analysis::Vec3 vec_from(const json& j, std::string_view key) {
     return v;
 }
 
-nlohmann::ordered_json vec_to(const analysis::Vec3& v) {
-    return nlohmann::ordered_json::array({v.x(), v.y(), v.z()});
-}
-
-json parse_object(std::string_view text, std::string_view what) {
-    json j;
+ojson parse_object(std::string_view text, std::string_view what) {
+    ojson j;
     try {
-        j = json::parse(text);
-    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
+        j = ojson::parse(text);
+    } catch (const ojson::exception& e) {  // parse_error, and out_of_range for a number past double
         throw FormatError(std::string(what) + " is not valid JSON: " + e.what());
     }
     if (!j.is_object()) throw FormatError(std::string(what) + " must be a JSON object");
@@ -58,14 +55,14 @@ std::string machine_to_json(const analysis::MachineGeometry& m) {
     nlohmann::ordered_json j = nlohmann::ordered_json::object();
     j["type"] = std::string(analysis::to_string(m.type));
     if (!m.name.empty()) j["name"] = m.name;
-    if (uses(m.type, "a_pivot_mm")) j["a_pivot_mm"] = vec_to(m.a_pivot_mm);
-    if (uses(m.type, "c_offset_mm")) j["c_offset_mm"] = vec_to(m.c_offset_mm);
-    j["tool_ball_mm"] = vec_to(m.tool_ball_mm);
+    if (uses(m.type, "a_pivot_mm")) j["a_pivot_mm"] = fileio::vec3_json<nlohmann::ordered_json>(m.a_pivot_mm);
+    if (uses(m.type, "c_offset_mm")) j["c_offset_mm"] = fileio::vec3_json<nlohmann::ordered_json>(m.c_offset_mm);
+    j["tool_ball_mm"] = fileio::vec3_json<nlohmann::ordered_json>(m.tool_ball_mm);
     return j.dump();  // nlohmann writes doubles with the shortest round-tripping representation
 }
 
 analysis::MachineGeometry machine_from_json(std::string_view text, std::vector<std::string>* warnings) {
-    const json j = parse_object(text, "machine");
+    const ojson j = parse_object(text, "machine");
     analysis::MachineGeometry m;
     const auto type_it = j.find("type");
     if (type_it == j.end()) throw FormatError("machine has no \"type\" (RRTTT, TTTRR or RTTTR)");
@@ -122,7 +119,7 @@ std::string instrument_to_json(const Instrument& in) {
 }
 
 Instrument instrument_from_json(std::string_view text) {
-    json j = parse_object(text, "instrument");
+    ojson j = parse_object(text, "instrument");
     Instrument in;
     auto take_string = [&](const char* key, std::string& out) {
         const auto it = j.find(key);

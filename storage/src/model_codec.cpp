@@ -12,7 +12,7 @@
 namespace ballbar::storage {
 namespace {
 
-using json = nlohmann::ordered_json;  // "format" first, then the keys in the order written
+using ojson = nlohmann::ordered_json;  // "format" first, then the keys in the order written
 
 constexpr std::string_view kKeys[] = {"format",  "machine",         "params",   "std",       "unobservable",
                                       "sockets", "residual_rms_um", "readings", "converged", "empirical",
@@ -24,16 +24,12 @@ std::string known_keys() {
     return out;
 }
 
-json vec_to(const analysis::Vec3& v) {
-    return json::array({v.x(), v.y(), v.z()});
-}
-
 [[noreturn]] void refuse(const std::string& key, const std::string& problem) {
     throw FormatError(key + ": " + problem);
 }
-using Fields = fileio::JsonFields<json, decltype(&refuse)>;  // fileio/json_fields.hpp
+using Fields = fileio::JsonFields<ojson, decltype(&refuse)>;  // fileio/json_fields.hpp
 
-analysis::Vec3 vec_from(const Fields& f, const json& v, const std::string& where) {
+analysis::Vec3 vec_from(const Fields& f, const ojson& v, const std::string& where) {
     if (!v.is_array() || v.size() != 3) f.refuse(where, "must be an array of 3 numbers (mm)");
     analysis::Vec3 out;
     for (std::size_t i = 0; i < 3; ++i)
@@ -47,8 +43,8 @@ analysis::Param param_from(const std::string& name, const std::string& where) {
     return *p;
 }
 
-const json& object_at(const json& j, const char* key, const char* shape) {
-    const json& v = j.at(key);
+const ojson& object_at(const ojson& j, const char* key, const char* shape) {
+    const ojson& v = j.at(key);
     if (!v.is_object()) throw FormatError(std::string("\"") + key + "\" must be an object " + shape);
     return v;
 }
@@ -62,24 +58,25 @@ analysis::ErrorParams ErrorModel::values() const {
 }
 
 std::string model_to_json(const ErrorModel& m) {
-    json j = json::object();
+    ojson j = ojson::object();
     j["format"] = std::string(kModelFormat);
-    j["machine"] = json::parse(machine_to_json(m.machine));
-    j["params"] = json::object();
+    j["machine"] = ojson::parse(machine_to_json(m.machine));
+    j["params"] = ojson::object();
     for (const ModelParam& p : m.params) j["params"][std::string(analysis::param_info(p.param).name)] = p.value;
     // std, unobservable and sockets are written even when empty: a script reads them without asking first.
-    j["std"] = json::object();
+    j["std"] = ojson::object();
     for (const ModelParam& p : m.params)
         if (p.std) j["std"][std::string(analysis::param_info(p.param).name)] = *p.std;
-    j["unobservable"] = json::array();
+    j["unobservable"] = ojson::array();
     for (analysis::Param p : m.unobservable) j["unobservable"].push_back(std::string(analysis::param_info(p).name));
     if (!m.empirical.empty()) {
-        j["empirical"] = json::object();
+        j["empirical"] = ojson::object();
         for (const analysis::LearnedTerm& t : m.empirical) j["empirical"][t.term.name()] = t.value;
     }
-    j["sockets"] = json::array();
+    j["sockets"] = ojson::array();
     for (const ModelSocket& s : m.sockets)
-        j["sockets"].push_back({{"nominal_mm", vec_to(s.nominal_mm)}, {"offset_mm", vec_to(s.offset_mm)}});
+        j["sockets"].push_back({{"nominal_mm", fileio::vec3_json<nlohmann::ordered_json>(s.nominal_mm)},
+                                {"offset_mm", fileio::vec3_json<nlohmann::ordered_json>(s.offset_mm)}});
     if (m.residual_rms_um) j["residual_rms_um"] = *m.residual_rms_um;
     if (m.readings) j["readings"] = *m.readings;
     if (m.converged) j["converged"] = *m.converged;
@@ -88,10 +85,10 @@ std::string model_to_json(const ErrorModel& m) {
 }
 
 ErrorModel model_from_json(std::string_view text) {
-    json j;
+    ojson j;
     try {
-        j = json::parse(text);
-    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number past double
+        j = ojson::parse(text);
+    } catch (const ojson::exception& e) {  // parse_error, and out_of_range for a number past double
         throw FormatError(std::string("malformed JSON: ") + e.what());
     }
     if (!j.is_object()) throw FormatError("a model must be a JSON object");
@@ -148,7 +145,7 @@ ErrorModel model_from_json(std::string_view text) {
     if (j.contains("sockets")) {
         if (!j["sockets"].is_array()) throw FormatError("\"sockets\" must be an array");
         for (std::size_t i = 0; i < j["sockets"].size(); ++i) {
-            const json& s = j["sockets"][i];
+            const ojson& s = j["sockets"][i];
             const std::string where = "sockets[" + std::to_string(i) + "]";
             if (!s.is_object() || !s.contains("nominal_mm") || !s.contains("offset_mm") || s.size() != 2)
                 throw FormatError(where + ": must be {\"nominal_mm\": [x, y, z], \"offset_mm\": [x, y, z]}");

@@ -12,15 +12,12 @@
 #include "ballbar/fileio/output.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/readings_file.hpp"
+#include "shortest.hpp"
 
 namespace ballbar::storage {
 namespace {
 
-std::string shortest(double v) {
-    char buf[40];
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    return std::string(buf, r.ptr);
-}
+using detail::shortest;
 
 /// The shortest decimal degrees that read back (through deg_to_rad) to exactly `rad`: -30, not
 /// -29.999999999999996. Falls back to the nearest double when no decimal maps back exactly.

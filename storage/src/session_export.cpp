@@ -15,7 +15,7 @@ namespace {
 using ojson = nlohmann::ordered_json;
 
 ojson parse_or_text(const std::string& text) {
-    if (text.empty()) return ojson::object();
+    if (text.empty()) return nullptr;
     auto j = ojson::parse(text, nullptr, false);
     return j.is_discarded() ? ojson(text) : j;
 }
@@ -25,17 +25,22 @@ ojson opt(const std::optional<T>& v) {
     return v ? ojson(*v) : ojson(nullptr);
 }
 
+/// A text, or null when empty (docs/cli.md's vocabulary has no "").
+ojson text(const std::string& s) {
+    return s.empty() ? ojson(nullptr) : ojson(s);
+}
+
 ojson session_header(const SessionInfo& s) {
     ojson j;
     j["id"] = s.id;
     j["uuid"] = s.uuid;
     j["state"] = std::string(to_string(s.state));
-    j["state_reason"] = s.reason;
+    j["state_reason"] = text(s.reason);
     j["resumable"] = s.resumable();
     j["source"] = std::string(to_string(s.source));
-    j["operator"] = s.operator_name;
-    j["procedure"] = s.procedure;
-    j["notes"] = s.notes;
+    j["operator"] = text(s.operator_name);
+    j["procedure"] = text(s.procedure);
+    j["notes"] = text(s.notes);
     j["started_at"] = s.started_at;
     j["ended_at"] = opt(s.ended_at);
     j["machine"] = ojson::parse(machine_to_json(s.machine));
@@ -62,7 +67,7 @@ ojson point_json(const PointRecord& p) {
     j["socket_mm"] = {r.socket_mm.x(), r.socket_mm.y(), r.socket_mm.z()};
     j["nominal_mm"] = p.nominal_mm;
     j["measured_mm"] = r.measured_mm;
-    j["std_mm"] = opt(r.std_mm);
+    j["sd_mm"] = opt(r.std_mm);  // the readings' spread, not an uncertainty
     j["n"] = r.n;
     j["first_seq"] = opt(p.first_seq);
     j["last_seq"] = opt(p.last_seq);
@@ -106,7 +111,8 @@ std::string session_json(Store& store, std::int64_t id, bool with_points, int in
     doc["transitions"] = transitions;
     ojson procedure = ojson::array();
     for (const auto& p : store.procedure_steps(id)) {
-        procedure.push_back({{"from", p.from}, {"to", p.to}, {"event", p.event}, {"detail", p.detail}, {"at", p.at}});
+        procedure.push_back(
+            {{"from", p.from}, {"to", p.to}, {"event", p.event}, {"detail", text(p.detail)}, {"at", p.at}});
     }
     doc["procedure"] = procedure;
     ojson segments = ojson::array();
@@ -148,7 +154,7 @@ std::string session_json(Store& store, std::int64_t id, bool with_points, int in
                           {"parent_id", opt(m.parent_id)},
                           {"created_at", m.created_at},
                           {"session_ids", m.session_ids},
-                          {"notes", m.notes},
+                          {"notes", text(m.notes)},
                           {"params", parse_or_text(m.params_json)}});
     }
     doc["models"] = models;

@@ -16,12 +16,13 @@
 #include "ballbar/fileio/input.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/sqlite.hpp"
+#include "shortest.hpp"
 
 namespace ballbar::storage {
 namespace {
 
 namespace circ = analysis::circular;
-using json = nlohmann::ordered_json;
+using ojson = nlohmann::ordered_json;
 
 constexpr std::string_view kMagic = "# ballbar-trace/1";
 
@@ -43,13 +44,9 @@ std::optional<double> parse_number(std::string_view s) {
     return v;
 }
 
-std::string shortest(double v) {
-    char buf[64];
-    const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, v);
-    return ec == std::errc() ? std::string(buf, ptr) : std::to_string(v);
-}
+using detail::shortest;
 
-double need_number(const json& j, const char* key) {
+double need_number(const ojson& j, const char* key) {
     if (!j.contains(key)) throw std::runtime_error(std::string("needs \"") + key + "\"");
     if (!j[key].is_number()) throw std::runtime_error(std::string("\"") + key + "\" must be a number");
     return j[key].get<double>();
@@ -57,7 +54,7 @@ double need_number(const json& j, const char* key) {
 
 /// A key of a test header object that the format does not have is refused: a misspelt key would
 /// otherwise describe a test that was not run.
-void only_keys(const json& j, const std::string& where, std::initializer_list<std::string_view> allowed) {
+void only_keys(const ojson& j, const std::string& where, std::initializer_list<std::string_view> allowed) {
     for (const auto& item : j.items()) {
         bool known = false;
         for (const std::string_view k : allowed) known = known || item.key() == k;
@@ -81,7 +78,7 @@ std::string column_problem(std::string_view column, double v) {
     return why.empty() ? why : std::string(column) + " " + why;
 }
 
-circ::TestSpec test_from_json(const json& j) {
+circ::TestSpec test_from_json(const ojson& j) {
     if (!j.is_object()) throw std::runtime_error("must be a JSON object");
     only_keys(j, "", {"kind", "plane", "radius_mm", "centre_mm", "feed_mm_min", "feed_in_mm", "runs"});
     if (!j.contains("kind") || j["kind"] != "circular")
@@ -95,7 +92,7 @@ circ::TestSpec test_from_json(const json& j) {
     t.feed_mm_min = need_number(j, "feed_mm_min");
     t.feed_in_mm = need_number(j, "feed_in_mm");
     if (!j.contains("centre_mm")) throw std::runtime_error("needs \"centre_mm\"");
-    const json& c = j["centre_mm"];
+    const ojson& c = j["centre_mm"];
     if (!c.is_array() || c.size() != 3) throw std::runtime_error("\"centre_mm\" must be an array of 3 numbers");
     for (std::size_t i = 0; i < 3; ++i) {
         if (!c[i].is_number()) throw std::runtime_error("\"centre_mm\" must be an array of 3 numbers");
@@ -104,7 +101,7 @@ circ::TestSpec test_from_json(const json& j) {
     if (!j.contains("runs") || !j["runs"].is_array() || j["runs"].empty())
         throw std::runtime_error("needs \"runs\", a non-empty array");
     for (std::size_t i = 0; i < j["runs"].size(); ++i) {
-        const json& r = j["runs"][i];
+        const ojson& r = j["runs"][i];
         const std::string where = "runs[" + std::to_string(i) + "]: ";
         if (!r.is_object()) throw std::runtime_error(where + "must be an object");
         only_keys(r, where, {"direction", "start_deg", "overshoot_deg", "data_arc_deg"});
@@ -168,10 +165,10 @@ bool looks_like_trace(std::string_view text) {
 }
 
 std::string test_json(const circ::TestSpec& t) {
-    json j = {{"kind", "circular"},           {"plane", circ::plane_name(t.plane)},
-              {"radius_mm", t.radius_mm},     {"centre_mm", {t.centre_mm[0], t.centre_mm[1], t.centre_mm[2]}},
-              {"feed_mm_min", t.feed_mm_min}, {"feed_in_mm", t.feed_in_mm}};
-    json runs = json::array();
+    ojson j = {{"kind", "circular"},           {"plane", circ::plane_name(t.plane)},
+               {"radius_mm", t.radius_mm},     {"centre_mm", {t.centre_mm[0], t.centre_mm[1], t.centre_mm[2]}},
+               {"feed_mm_min", t.feed_mm_min}, {"feed_in_mm", t.feed_in_mm}};
+    ojson runs = ojson::array();
     for (const auto& r : t.runs)
         runs.push_back({{"direction", circ::direction_name(r.direction)},
                         {"start_deg", r.start_deg},
@@ -210,10 +207,10 @@ TraceFile parse_trace(std::string_view text) {
         static const char* known[] = {"test", "instrument", "machine", "operator", "started_at", "notes"};
         const bool is_known = std::find_if(std::begin(known), std::end(known),
                                            [&](const char* k) { return key == k; }) != std::end(known);
-        json j;
+        ojson j;
         try {
-            j = json::parse(value);
-        } catch (const json::exception&) {
+            j = ojson::parse(value);
+        } catch (const ojson::exception&) {
             if (!is_known) continue;  // "# remark: text" is a comment
             throw TraceFileError(no, "the value of \"" + key + "\" is not one line of JSON");
         }
@@ -346,9 +343,9 @@ std::string format_trace(const TraceFile& t) {
     out += "\n# test: " + test_json(t.test) + "\n";
     if (!t.instrument_json.empty()) out += "# instrument: " + t.instrument_json + "\n";
     if (!t.machine_json.empty()) out += "# machine: " + t.machine_json + "\n";
-    if (!t.operator_name.empty()) out += "# operator: " + json(t.operator_name).dump() + "\n";
-    if (!t.started_at.empty()) out += "# started_at: " + json(t.started_at).dump() + "\n";
-    if (!t.notes.empty()) out += "# notes: " + json(t.notes).dump() + "\n";
+    if (!t.operator_name.empty()) out += "# operator: " + ojson(t.operator_name).dump() + "\n";
+    if (!t.started_at.empty()) out += "# started_at: " + ojson(t.started_at).dump() + "\n";
+    if (!t.notes.empty()) out += "# notes: " + ojson(t.notes).dump() + "\n";
     for (const auto& [k, v] : t.extra) out += "# " + k + ": " + v + "\n";
     const bool bar = !t.bar_temp_C.empty(), air = !t.air_temp_C.empty();
     out += "time_s,measured_mm";
@@ -378,19 +375,19 @@ std::int64_t import_trace(Store& store, const TraceFile& trace, const std::strin
     ns.started_at = trace.started_at;
     // Samples hold nanometres from a reference length (an int32): half-way down the feed-in.
     const double reference_mm = trace.test.radius_mm + 0.5 * trace.test.feed_in_mm;
-    json meta = {{"format", "ballbar-trace/1"},
-                 {"file", file_name},
-                 {"test", json::parse(test_json(trace.test))},
-                 {"reference_length_mm", reference_mm},
-                 {"has_bar_temp", !trace.bar_temp_C.empty()}};
-    if (!trace.machine_json.empty()) meta["machine"] = json::parse(trace.machine_json);
-    if (!trace.instrument_json.empty()) meta["instrument"] = json::parse(trace.instrument_json);
-    json extra = json::object();
-    for (const auto& [k, v] : trace.extra) extra[k] = json::parse(v);
+    ojson meta = {{"format", "ballbar-trace/1"},
+                  {"file", file_name},
+                  {"test", ojson::parse(test_json(trace.test))},
+                  {"reference_length_mm", reference_mm},
+                  {"has_bar_temp", !trace.bar_temp_C.empty()}};
+    if (!trace.machine_json.empty()) meta["machine"] = ojson::parse(trace.machine_json);
+    if (!trace.instrument_json.empty()) meta["instrument"] = ojson::parse(trace.instrument_json);
+    ojson extra = ojson::object();
+    for (const auto& [k, v] : trace.extra) extra[k] = ojson::parse(v);
     meta["extra"] = extra;
     if (!trace.air_temp_C.empty()) {
-        json air = json::array();
-        for (const auto& a : trace.air_temp_C) air.push_back(a ? json(*a) : json(nullptr));
+        ojson air = ojson::array();
+        for (const auto& a : trace.air_temp_C) air.push_back(a ? ojson(*a) : ojson(nullptr));
         meta["air_temp_C"] = air;
     }
     ns.metadata_json = meta.dump();
@@ -427,7 +424,7 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
     if (info.procedure != "circular")
         throw std::runtime_error("session " + std::to_string(session_id) + " is not a circular test (procedure \"" +
                                  info.procedure + "\")");
-    const json meta = json::parse(info.metadata_json.empty() ? "{}" : info.metadata_json);
+    const ojson meta = ojson::parse(info.metadata_json.empty() ? "{}" : info.metadata_json);
     if (!meta.contains("test"))
         throw std::runtime_error("session " + std::to_string(session_id) + " has no test header");
     TraceFile t;
@@ -439,7 +436,7 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
     std::optional<std::pair<std::int64_t, std::int64_t>> window;
     for (const auto& r : store.results(session_id)) {
         if (r.kind != "circular.attempt") continue;
-        const json a = json::parse(r.payload_json, nullptr, false);
+        const ojson a = ojson::parse(r.payload_json, nullptr, false);
         if (a.is_discarded() || !a.value("good", false)) continue;
         window = std::make_pair(a.value("first_seq", std::int64_t{0}), a.value("last_seq", std::int64_t{-1}));
         reference_mm = a.value("reference_length_mm", reference_mm);
@@ -475,7 +472,7 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
 }
 
 circ::TestSpec parse_test_json(std::string_view text) {
-    const json j = json::parse(text, nullptr, false);
+    const ojson j = ojson::parse(text, nullptr, false);
     if (j.is_discarded()) throw std::runtime_error("not valid JSON");
     circ::TestSpec t = test_from_json(j);
     if (const std::string bad = t.validate(); !bad.empty()) throw std::runtime_error(bad);

@@ -52,11 +52,11 @@ TEST(EffectLibrary, HasTheIssuesEffects) {
         const char* unit;
     };
     const Want want[] = {{"bar_length_offset", "", Param::bar_length, "mm"},
-                         {"bar_thermal_expansion", "", Param::bar_kappa, "1/K"},
-                         {"spindle_thermal_growth", "", Param::spindle_growth, "mm/h"},
-                         {"scale_X", "EXX", Param::EXX, "mm/mm"},
-                         {"scale_Y", "EYY", Param::EYY, "mm/mm"},
-                         {"scale_Z", "EZZ", Param::EZZ, "mm/mm"},
+                         {"bar_thermal_expansion", "", Param::bar_kappa, "per_K"},
+                         {"spindle_thermal_growth", "", Param::spindle_growth, "mm_per_h"},
+                         {"scale_X", "EXX", Param::EXX, "mm_per_mm"},
+                         {"scale_Y", "EYY", Param::EYY, "mm_per_mm"},
+                         {"scale_Z", "EZZ", Param::EZZ, "mm_per_mm"},
                          {"squareness_XY", "C0Y", Param::C0Y, "rad"},
                          {"squareness_YZ", "A0Z", Param::A0Z, "rad"},
                          {"squareness_ZX", "B0Z", Param::B0Z, "rad"},

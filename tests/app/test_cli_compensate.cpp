@@ -45,16 +45,18 @@ TEST(CliSolveCompensate, AnswersWithFirstOrderAndExactCorrections) {
     const CliRun r = run(d, "solve compensate", req.dump());
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
-    ASSERT_EQ(a["du"].size(), 5u);
-    ASSERT_EQ(a["exact_du"].size(), 5u);
+    ASSERT_EQ(a["du_mm"].size(), 3u);
+    ASSERT_EQ(a["du_rad"].size(), 2u);
+    ASSERT_EQ(a["exact_du_mm"].size(), 3u);
     EXPECT_FALSE(a["singular"].get<bool>());
     EXPECT_TRUE(a["method"].is_string());
     // The closed-form orientation part (seed-math): dθa = C_a(S_c di + C_c dj) − S_a dk.
     const double sa = std::sin(0.5), ca = std::cos(0.5), sc = std::sin(0.8), cc = std::cos(0.8);
-    EXPECT_NEAR(a["du"][3].get<double>(), ca * (sc * 2e-5 + cc * -1e-5) - sa * 1e-5, 1e-15);
-    EXPECT_NEAR(a["du"][4].get<double>(), (cc * 2e-5 - sc * -1e-5) / sa, 1e-15);
+    EXPECT_NEAR(a["du_rad"][0].get<double>(), ca * (sc * 2e-5 + cc * -1e-5) - sa * 1e-5, 1e-15);
+    EXPECT_NEAR(a["du_rad"][1].get<double>(), (cc * 2e-5 - sc * -1e-5) / sa, 1e-15);
     // First order and exact agree to second order (dv of 20 µm on ~150 mm: ~1e-6).
-    for (int i = 0; i < 5; ++i) EXPECT_NEAR(a["du"][i].get<double>(), a["exact_du"][i].get<double>(), 1e-5);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(a["du_mm"][i].get<double>(), a["exact_du_mm"][i].get<double>(), 1e-5);
+    for (int i = 0; i < 2; ++i) EXPECT_NEAR(a["du_rad"][i].get<double>(), a["exact_du_rad"][i].get<double>(), 1e-5);
 }
 
 TEST(CliSolveCompensate, SingularPoseHasNoCCorrection) {
@@ -64,8 +66,8 @@ TEST(CliSolveCompensate, SingularPoseHasNoCCorrection) {
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
     EXPECT_TRUE(a["singular"].get<bool>());
-    EXPECT_EQ(a["du"][4].get<double>(), 0.0);
-    EXPECT_EQ(a["exact_du"][4].get<double>(), 0.0);
+    EXPECT_EQ(a["du_rad"][1].get<double>(), 0.0);
+    EXPECT_EQ(a["exact_du_rad"][1].get<double>(), 0.0);
 }
 
 TEST(CliSolveCompensate, MalformedRequestsNameTheField) {
@@ -152,8 +154,8 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
     EXPECT_TRUE(a["converged"].get<bool>());
     std::map<std::string, json> est;
     for (const auto& e : a["estimates"]) est[e["name"].get<std::string>()] = e;
-    EXPECT_NEAR(est["X0C"]["estimate"].get<double>(), 0.03, 1e-7);
-    EXPECT_NEAR(est["Y0C"]["estimate"].get<double>(), -0.02, 1e-7);
+    EXPECT_NEAR(est["X0C"]["value"].get<double>(), 0.03, 1e-7);
+    EXPECT_NEAR(est["Y0C"]["value"].get<double>(), -0.02, 1e-7);
     EXPECT_FALSE(est["C_zero"]["observable"].get<bool>());  // a turn of the socket is a socket offset
     EXPECT_LT(a["residual_rms_um"].get<double>(), 1e-3);
     ASSERT_TRUE(a.contains("model_id"));
@@ -263,14 +265,15 @@ TEST(CliDemoCompensate, ImprovesEveryAxisAtLeastFiveTimes) {
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
     for (const char* axis : {"X", "Y", "Z"}) {
-        EXPECT_GE(a["improvement"][axis].get<double>(), 5.0) << axis;
+        EXPECT_GE(a["improvement_ratio"][axis].get<double>(), 5.0) << axis;
         EXPECT_GT(a["rms_before_um"][axis].get<double>(), 1.0) << axis;  // there was something to fix
     }
     ASSERT_FALSE(a["identified"].empty());
     for (const auto& p : a["identified"]) {
-        ASSERT_TRUE(p.contains("name") && p.contains("estimate") && p.contains("true") && p.contains("std"));
+        ASSERT_TRUE(p.contains("name") && p.contains("unit") && p.contains("value") && p.contains("true_value") &&
+                    p.contains("value_std"));
     }
-    EXPECT_TRUE(a["residual_um"].contains("X"));
+    EXPECT_TRUE(a["rms_after_um"].contains("X"));
 
     // The before/after is stored with the demo session: its report has the compensation section,
     // with the numbers the demo printed.
@@ -281,9 +284,8 @@ TEST(CliDemoCompensate, ImprovesEveryAxisAtLeastFiveTimes) {
     ASSERT_EQ(j["compensation"]["axes"].size(), 3u) << rep.out;
     for (const auto& ax : j["compensation"]["axes"]) {
         const std::string axis = ax["axis"];
-        EXPECT_NEAR(ax["before"].get<double>(), a["rms_before_um"][axis].get<double>(), 1e-9) << axis;
-        EXPECT_NEAR(ax["after"].get<double>(), a["residual_um"][axis].get<double>(), 1e-9) << axis;
-        EXPECT_EQ(ax["unit"], "µm");
+        EXPECT_NEAR(ax["before_um"].get<double>(), a["rms_before_um"][axis].get<double>(), 1e-9) << axis;
+        EXPECT_NEAR(ax["after_um"].get<double>(), a["rms_after_um"][axis].get<double>(), 1e-9) << axis;
     }
     EXPECT_NE(j["compensation"]["metric"].get<std::string>().find("test path"), std::string::npos);
 }

@@ -391,7 +391,7 @@ TEST(CliCompensateCam, ZeroErrorModelReproducesTheProgramsMotion) {
 TEST(CliCompensateCam, SummaryCountsTheModeOfEveryBlock) {
     TempDir d;
     const Outcome o = compensate_and_run(d, cam_sample(), seed_like(), "");
-    EXPECT_EQ(o.summary["modes"]["tool-centre-point"], 5);  // N210–N250
+    EXPECT_EQ(o.summary["modes"]["tool_centre_point"], 5);  // N210–N250
     EXPECT_EQ(o.summary["modes"]["joint"], 15);
     ASSERT_EQ(o.summary["mode_switches"].size(), 2u);
     EXPECT_EQ(o.summary["mode_switches"][0]["line"], 24);

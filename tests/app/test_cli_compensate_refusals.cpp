@@ -170,8 +170,8 @@ TEST(CliSolveCompensate, NearASingularityUsesTheCompensateDefault) {
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
     EXPECT_TRUE(a["singular"].get<bool>());
-    EXPECT_EQ(a["du"][4].get<double>(), 0.0);
-    EXPECT_EQ(a["exact_du"][4].get<double>(), 0.0);
+    EXPECT_EQ(a["du_rad"][1].get<double>(), 0.0);
+    EXPECT_EQ(a["exact_du_rad"][1].get<double>(), 0.0);
 }
 
 }  // namespace

@@ -110,21 +110,22 @@ TEST(Demo, JsonGivesMeasuredNextToTrueAndTheSessionId) {
     EXPECT_GE(j.at("session").get<int>(), 1);
     ASSERT_EQ(j.at("locations").size(), 8u);  // four tests, two steps
     for (const auto& l : j.at("locations")) {
-        ASSERT_EQ(l.at("measured_mm").size(), 3u);
-        ASSERT_EQ(l.at("std_mm").size(), 3u);
+        ASSERT_EQ(l.at("e_mm").size(), 3u);
+        ASSERT_EQ(l.at("e_mm_std").size(), 3u);
         double d2 = 0;
         for (int k = 0; k < 3; ++k)
-            d2 += std::pow(l.at("measured_mm")[k].get<double>() - l.at("true_mm")[k].get<double>(), 2);
+            d2 += std::pow(l.at("e_mm")[k].get<double>() - l.at("true_e_mm")[k].get<double>(), 2);
         EXPECT_LT(std::sqrt(d2), kPositionTol_mm) << l.dump();
     }
     ASSERT_EQ(j.at("orientation").size(), 4u);
     for (const auto& o : j.at("orientation")) {
-        ASSERT_TRUE(o.at("measured_rad").is_object()) << o.dump();
-        ASSERT_TRUE(o.at("std_rad").is_object()) << o.dump();
-        // A TTTRR test determines Δα and Δγ: the keys say which (d_alpha, d_gamma).
-        EXPECT_TRUE(o.at("true_rad").contains("d_alpha") && o.at("true_rad").contains("d_gamma")) << o.dump();
-        for (const auto& [k, v] : o.at("true_rad").items())
-            EXPECT_NEAR(o.at("measured_rad").at(k).get<double>(), v.get<double>(), kAngleTol_rad) << k;
+        // A TTTRR test determines Δα and Δγ: the keys say which (d_alpha_rad, d_gamma_rad), each with its
+        // uncertainty and the true value; Δβ is not there.
+        EXPECT_FALSE(o.contains("d_beta_rad")) << o.dump();
+        for (const char* k : {"d_alpha_rad", "d_gamma_rad"}) {
+            ASSERT_TRUE(o.contains(std::string(k) + "_std")) << o.dump();
+            EXPECT_NEAR(o.at(k).get<double>(), o.at(std::string("true_") + k).get<double>(), kAngleTol_rad) << k;
+        }
     }
     EXPECT_EQ(j.at("truth_check").at("wrong_pose"), 0);
     // The session is stored: a second demo gets the next id.
@@ -204,7 +205,7 @@ TEST(Demo, CompensationFlagsEstimatesMoreThanFiveSigmaFromTheTruth) {
         EXPECT_FALSE(off) << line;
         // The common scale EZZ is held at zero, so the fit sees EXX − EZZ and EYY − EZZ (physics, not a bug).
         if (name == "EXX" || name == "EYY") {
-            EXPECT_NEAR(p["identifiable_true"].get<double>(), p["true"].get<double>() - 5e-6, 0.05e-6) << name;
+            EXPECT_NEAR(p["identifiable_value"].get<double>(), p["true_value"].get<double>() - 5e-6, 0.05e-6) << name;
         }
     }
     // Units: no bare numbers in the identification's estimates.

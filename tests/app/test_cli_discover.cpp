@@ -44,14 +44,14 @@ TEST(CliDiscover, NamesTheHiddenEffectInAThirdPartyFile) {
     ASSERT_EQ(j["steps"].size(), 1u) << r.out;
     const json& st = j["steps"][0];
     EXPECT_EQ(st["effect"], "spindle_thermal_growth");
-    EXPECT_EQ(st["unit"], "mm/h");
+    EXPECT_EQ(st["unit"], "mm_per_h");
     EXPECT_EQ(st["criterion"], "F");
     EXPECT_EQ(st["explained_by"], "time");
     // The file's generator hid 0.025 mm/h of growth under 0.4 µm of noise.
-    const double est = st["estimate"], sd = st["stderr"];
+    const double est = st["value"], sd = st["value_std"];
     EXPECT_LE(std::abs(est - 0.025), std::max(3 * sd, 0.0025)) << est << " ± " << sd;
-    for (const char* key : {"effect", "iso", "estimate", "unit", "stderr", "rms_before_um", "rms_after_um", "criterion",
-                            "value", "explained_by"})
+    for (const char* key : {"effect", "iso", "value", "unit", "value_std", "rms_before_um", "rms_after_um", "criterion",
+                            "statistic", "explained_by"})
         EXPECT_TRUE(st.contains(key)) << key;
     EXPECT_GT(j["rms_initial_um"].get<double>(), 2.0);
     EXPECT_LT(j["rms_final_um"].get<double>(), 0.5);
@@ -150,7 +150,9 @@ TEST(CliDiscover, StructureOutsideTheLibraryIsFoundNeverCalledNoise) {
     EXPECT_EQ(st["effect"], "C_angular");
     EXPECT_EQ(st["explained_by"], "C");
     EXPECT_NE(st["where"].get<std::string>().find("once per revolution"), std::string::npos) << st["where"];
-    EXPECT_TRUE(st["terms"].contains("C_angular_h1_cos"));
+    bool h1_cos = false;  // the learned terms: a list of {name, unit, value, value_std}
+    for (const auto& t : st["terms"]) h1_cos = h1_cos || (t["name"] == "C_angular_h1_cos" && t.contains("value_std"));
+    EXPECT_TRUE(h1_cos) << st["terms"].dump();
     EXPECT_LE(j["rms_final_um"].get<double>(), 1.5 * j["noise_floor_um"].get<double>());
 
     // A floor the residual cannot reach: the verdict stays structure, and the table never says noise.

@@ -98,7 +98,7 @@ TEST(CliEmulateMonitor, PtyTwoSecondsGiveAbout2000SamplesAndNoLoss) {
     EXPECT_EQ(j.at("lost_frames").get<int>(), 0) << r.out;
     EXPECT_NEAR(j.at("rate_hz").get<double>(), 1000.0, 1.0);
     EXPECT_NEAR(j.at("mean_mm").get<double>(), 150.0237, 0.001);  // unreferenced zero error 23.7 µm
-    EXPECT_NEAR(j.at("std_mm").get<double>(), 0.25e-3, 0.05e-3);
+    EXPECT_NEAR(j.at("sd_mm").get<double>(), 0.25e-3, 0.05e-3);
     // A second session on the same pty works too (the emulator outlives its hosts).
     const auto r2 = run(std::string(BALLBAR_EXE) + " monitor --device serial:" + path + " --seconds 0.5 --json");
     ASSERT_EQ(r2.code, 0) << r2.out;
@@ -144,7 +144,7 @@ TEST(CliEmulateMonitor, AnInstrumentThatNeverStreamsIsAFailureNotZeroSamples) {
     const auto j = nlohmann::json::parse(json.out, nullptr, false);
     ASSERT_FALSE(j.is_discarded()) << json.out;
     EXPECT_EQ(j.at("samples").get<int>(), 0);
-    EXPECT_TRUE(j.at("std_mm").is_null()) << json.out;
+    EXPECT_TRUE(j.at("sd_mm").is_null()) << json.out;
     EXPECT_NE(j.at("error").get<std::string>().find("sent no samples"), std::string::npos) << json.out;
     std::remove(cfg.c_str());
     ::rmdir(dir_template);

@@ -266,7 +266,7 @@ TEST(CliMeasure, JsonGivesTheOperatorsEventsAsJsonLines) {
         const std::string ev = j.at("event");
         if (ev == "point") {
             ++points;
-            EXPECT_GT(j.at("std_um").get<double>(), 0.0) << line;
+            EXPECT_GT(j.at("sd_um").get<double>(), 0.0) << line;
             EXPECT_NE(j.at("evidence").get<std::string>().find("code "), std::string::npos) << line;
         }
         stops += ev == "program_stop";

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "../app/cli_harness.hpp"
+#include "diagnostic_json.hpp"
 #include "trace_generator.hpp"
 
 namespace {
@@ -42,11 +43,11 @@ TEST(CircularCli, ImportAnalyzeStoreExport) {
     EXPECT_GT(j["runs"][0]["circularity_um"].get<double>(), 0.0);
     EXPECT_TRUE(j["bidirectional_circularity_um"].is_number());
     EXPECT_TRUE(j["radial_deviation_um"]["max"].is_number());
-    EXPECT_NEAR(j["diagnostics"]["backlash_x_um"].get<double>(), 8.0, 1.6);
-    EXPECT_NEAR(j["diagnostics"]["backlash_y_um"].get<double>(), 5.0, 1.0);
-    EXPECT_NEAR(j["diagnostics"]["squareness_um_per_m"].get<double>(), 30.0, 6.0);
-    EXPECT_TRUE(j["uncertainties"]["backlash_x_um"].is_number());
-    EXPECT_TRUE(j["shares_percent"]["backlash_x_um"].is_number());
+    EXPECT_NEAR(ballbar::test::diagnostic(j, "backlash_x_um")["value"].get<double>(), 8.0, 1.6);
+    EXPECT_NEAR(ballbar::test::diagnostic(j, "backlash_y_um")["value"].get<double>(), 5.0, 1.0);
+    EXPECT_NEAR(ballbar::test::diagnostic(j, "squareness_um_per_m")["value"].get<double>(), 30.0, 6.0);
+    EXPECT_TRUE(ballbar::test::diagnostic(j, "backlash_x_um")["value_std"].is_number());
+    EXPECT_TRUE(ballbar::test::diagnostic(j, "backlash_x_um")["share_percent"].is_number());
     EXPECT_TRUE(j["tolerance"]["pass"].get<bool>());
     const auto show = run(dir, "sessions show " + std::to_string(id) + " --json");
     EXPECT_NE(show.out.find("circular"), std::string::npos);
@@ -158,8 +159,8 @@ TEST(CircularCli, TheHighestUsableFeedOfASlowGaugeIsAnalysed) {
     ASSERT_EQ(an.code, 0) << an.err;
     const auto j = nlohmann::json::parse(an.out);
     ASSERT_EQ(j["runs"].size(), 2u);
-    EXPECT_NEAR(j["diagnostics"]["backlash_x_um"].get<double>(), 8.0, 1.6);
-    EXPECT_NEAR(j["diagnostics"]["backlash_y_um"].get<double>(), 5.0, 1.0);
+    EXPECT_NEAR(ballbar::test::diagnostic(j, "backlash_x_um")["value"].get<double>(), 8.0, 1.6);
+    EXPECT_NEAR(ballbar::test::diagnostic(j, "backlash_y_um")["value"].get<double>(), 5.0, 1.0);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "../app/cli_harness.hpp"
+#include "diagnostic_json.hpp"
 
 namespace {
 
@@ -37,19 +38,19 @@ void expect_truth_met(const TempDir& dir, const json& j) {
     ASSERT_TRUE(j.is_object() && j.contains("diagnostics")) << j.dump();
     EXPECT_TRUE(j["pass"].get<bool>()) << j.dump(1);
     for (const auto& d : j["diagnostics"]) EXPECT_TRUE(d["pass"].get<bool>()) << d.dump() << " (" << j["plane"] << ")";
-    ASSERT_EQ(j["circularity_um"].size(), 2u);
+    ASSERT_EQ(j["runs"].size(), 2u);
     const std::string id = std::to_string(j["session"].get<int>());
     // The stored session reads like an imported trace: analyze it, export it, analyze the file.
     const auto an = run(dir, "circle analyze " + id + " --json");
     ASSERT_EQ(an.code, 0) << an.err;
     const auto a = json::parse(an.out);
-    EXPECT_NEAR(a["runs"][0]["circularity_um"].get<double>(), j["circularity_um"][0]["G"].get<double>(), 1e-9);
+    EXPECT_NEAR(a["runs"][0]["circularity_um"].get<double>(), j["runs"][0]["circularity_um"].get<double>(), 1e-9);
     const auto ex = run(dir, "export " + id + " --format trace --out '" + dir.file("back.csv") + "'");
     ASSERT_EQ(ex.code, 0) << ex.err;
     const auto back = run(dir, "circle analyze '" + dir.file("back.csv") + "' --json");
     ASSERT_EQ(back.code, 0) << back.err;
     EXPECT_NEAR(json::parse(back.out)["runs"][1]["circularity_um"].get<double>(),
-                j["circularity_um"][1]["G"].get<double>(), 0.01);
+                j["runs"][1]["circularity_um"].get<double>(), 0.01);
 }
 
 }  // namespace
@@ -202,10 +203,12 @@ TEST(CircleMeasure, TwoProcessesEmulatePtyAndMeasureStoreAnAnalysableSession) {
     ASSERT_EQ(m.code, 0) << m.err << m.out;
     EXPECT_NE(m.out.find("\"event\":\"run_program\""), std::string::npos) << m.out;
     const auto done = json::parse(m.out.substr(m.out.rfind("{\"event\":\"done\"")));
-    const auto& diag = done["result"]["diagnostics"];
-    EXPECT_NEAR(diag["backlash_x_um"].get<double>(), 4.0, 0.8) << done.dump();
-    EXPECT_NEAR(diag["backlash_y_um"].get<double>(), -2.5, 0.5);
-    EXPECT_NEAR(diag["squareness_um_per_m"].get<double>(), 40.0, 8.0);
+    const auto diag = [&done](const char* key) {
+        return ballbar::test::diagnostic(done["result"], key)["value"].get<double>();
+    };
+    EXPECT_NEAR(diag("backlash_x_um"), 4.0, 0.8) << done.dump();
+    EXPECT_NEAR(diag("backlash_y_um"), -2.5, 0.5);
+    EXPECT_NEAR(diag("squareness_um_per_m"), 40.0, 8.0);
     const std::string id = std::to_string(done["session"].get<int>());
     const auto an = run(dir, "circle analyze " + id + " --json");
     EXPECT_EQ(an.code, 0) << an.err;
@@ -311,5 +314,6 @@ TEST(CircleMeasure, CtrlCDuringTheProgramStopsWithExit3AndTheSessionResumes) {
     EXPECT_NE(r.out.find("completed"), std::string::npos) << r.out;
     const auto an = run(dir, "circle analyze " + id + " --json");
     ASSERT_EQ(an.code, 0) << an.err;
-    EXPECT_NEAR(json::parse(an.out)["diagnostics"]["backlash_x_um"].get<double>(), 4.0, 0.8) << an.out;
+    EXPECT_NEAR(ballbar::test::diagnostic(json::parse(an.out), "backlash_x_um")["value"].get<double>(), 4.0, 0.8)
+        << an.out;
 }

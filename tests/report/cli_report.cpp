@@ -35,7 +35,7 @@ TEST_P(CliReport, DemoSessionReportHoldsItsNumbers) {
     const auto pdf = dir.path / "report.pdf";
     const std::string out = run_capture(exe + " --db " + db + " report 1 --out " + quoted(pdf) + " --json");
     const auto j = nlohmann::json::parse(out);
-    EXPECT_EQ(j["schema"], "ballbar-report/1");
+    EXPECT_EQ(j["schema"], "ballbar-report/2");
     EXPECT_EQ(j["header"]["machine"]["type"], GetParam());
     EXPECT_GT(j["bar_trace"]["samples"].get<double>(), 1000);
     ASSERT_FALSE(j["locations"].empty());
@@ -47,7 +47,7 @@ TEST_P(CliReport, DemoSessionReportHoldsItsNumbers) {
     EXPECT_NE(text.find("page 1 of " + std::to_string(pages)), std::string::npos);
     for (const auto& l : j["locations"])
         for (int k = 0; k < 3; ++k)
-            EXPECT_NE(text.find(plus_minus_text(l["error_um"][k].get<double>(), l["uncertainty_um"][k].get<double>())),
+            EXPECT_NE(text.find(plus_minus_text(l["dV_um"][k].get<double>(), l["dV_um_std"][k].get<double>())),
                       std::string::npos)
                 << l.dump();
     // The same numbers as `sessions show --json` holds in the stored results (mm and rad there).
@@ -75,9 +75,9 @@ TEST_P(CliReport, DemoSessionReportHoldsItsNumbers) {
     EXPECT_EQ(static_cast<std::size_t>(ssm), j["locations"].size());
     EXPECT_GT(orientation, 0);
     for (const auto& o : j["orientation"]) {
-        if (o["exact"].is_null()) continue;
-        EXPECT_NE(text.find(fixed_text(o["exact"]["deg"].get<double>(), 5) + "°"), std::string::npos) << o.dump();
-        EXPECT_NE(text.find(fixed_text(o["exact"]["arcsec"].get<double>(), 1) + "″"), std::string::npos) << o.dump();
+        if (o["exact_rad"].is_null()) continue;
+        EXPECT_NE(text.find(fixed_text(o["exact_deg"].get<double>(), 5) + "°"), std::string::npos) << o.dump();
+        EXPECT_NE(text.find(fixed_text(o["exact_arcsec"].get<double>(), 1) + "″"), std::string::npos) << o.dump();
     }
 }
 

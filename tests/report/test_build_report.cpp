@@ -66,10 +66,10 @@ TEST_P(BuildByType, StoredSessionBecomesTheReport) {
     const auto j = to_json(r);
     for (const auto& l : j["locations"])
         for (int k = 0; k < 3; ++k)
-            EXPECT_NE(text.find(plus_minus_text(l["error_um"][k].get<double>(), l["uncertainty_um"][k].get<double>())),
+            EXPECT_NE(text.find(plus_minus_text(l["dV_um"][k].get<double>(), l["dV_um_std"][k].get<double>())),
                       std::string::npos);
     for (const auto& o : j["orientation"])
-        EXPECT_NE(text.find(fixed_text(o["exact"]["arcsec"].get<double>(), 1) + "″"), std::string::npos);
+        EXPECT_NE(text.find(fixed_text(o["exact_arcsec"].get<double>(), 1) + "″"), std::string::npos);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, BuildByType,

@@ -48,16 +48,16 @@ TEST_P(RenderByType, PdfHoldsTheKeyFiguresOfTheJson) {
     ASSERT_EQ(j["locations"].size(), r.locations.size());
     for (const auto& l : j["locations"]) {
         for (int k = 0; k < 3; ++k) {
-            expect_in_text(plus_minus_text(l["error_um"][k].get<double>(), l["uncertainty_um"][k].get<double>()));
+            expect_in_text(plus_minus_text(l["dV_um"][k].get<double>(), l["dV_um_std"][k].get<double>()));
         }
         expect_in_text(fixed_text(l["magnitude_um"].get<double>(), 2));
     }
     ASSERT_EQ(j["orientation"].size(), r.orientation.size());
     for (const auto& o : j["orientation"]) {
-        expect_in_text(fixed_text(o["exact"]["deg"].get<double>(), 5) + "°");
-        expect_in_text(fixed_text(o["exact"]["arcsec"].get<double>(), 1) + "″");
-        expect_in_text(fixed_text(o["first_order"]["deg"].get<double>(), 5) + "°");
-        expect_in_text(fixed_text(o["first_order"]["arcsec"].get<double>(), 1) + "″");
+        expect_in_text(fixed_text(o["exact_deg"].get<double>(), 5) + "°");
+        expect_in_text(fixed_text(o["exact_arcsec"].get<double>(), 1) + "″");
+        expect_in_text(fixed_text(o["first_order_deg"].get<double>(), 5) + "°");
+        expect_in_text(fixed_text(o["first_order_arcsec"].get<double>(), 1) + "″");
     }
     for (const auto& p : j["model"]["parameters"]) {
         expect_in_text(p["name"].get<std::string>());
@@ -137,16 +137,16 @@ TEST(Json, HoldsTheContentWithUnitsAndNullForMissing) {
     Report r = testing::synthetic_report(analysis::MachineType::RRTTT, 20000, 5);
     r.orientation[0].first_order_rad.reset();  // singular first-order model
     const nlohmann::json j = to_json(r);
-    EXPECT_EQ(j["schema"], "ballbar-report/1");
-    EXPECT_TRUE(j["orientation"][0]["first_order"].is_null());
-    EXPECT_NEAR(j["orientation"][0]["exact"]["arcsec"].get<double>(),
-                analysis::rad_to_arcsec(*r.orientation[0].exact_rad), 1e-9);
+    EXPECT_EQ(j["schema"], "ballbar-report/2");
+    EXPECT_TRUE(j["orientation"][0]["first_order_rad"].is_null());
+    EXPECT_NEAR(j["orientation"][0]["exact_arcsec"].get<double>(), analysis::rad_to_arcsec(*r.orientation[0].exact_rad),
+                1e-9);
     EXPECT_EQ(j["bar_trace"]["samples"].get<std::uint64_t>(), 20000u);
     EXPECT_EQ(j["bar_trace"]["time_s"].size(), r.trace.time_s.size());
     EXPECT_LE(r.trace.time_s.size(), 4u * 2000u);
     EXPECT_EQ(j["bar_trace"]["max_um"].get<double>(), *r.trace.max_um);
     EXPECT_EQ(j["header"]["machine"].count("c_offset_mm"), 0u);  // an RRTTT has no C frame
-    EXPECT_EQ(j["locations"][1]["error_um"][2].get<double>(), r.locations[1].error_um.z());
+    EXPECT_EQ(j["locations"][1]["dV_um"][2].get<double>(), r.locations[1].error_um.z());
     EXPECT_EQ(j["compensation"]["axes"].size(), r.compensation.size());
     EXPECT_TRUE(j["header"]["temperatures_C"]["air"].is_null());
 }

@@ -93,7 +93,8 @@ TEST(Results, DiscoverStepsWithBinnedTrends) {
 TEST(Results, MalformedPayloadsNameTheKey) {
     Report r = tttrr();
     try {
-        add_result(r, "compensation", json::parse(R"({"axes":[{"axis":"X","unit":"µm","before":"big"}]})"));
+        add_result(r, "compensation",
+                   json::parse(R"({"metric":"m","axes":[{"axis":"X","unit":"µm","before":"big","after":1}]})"));
         FAIL() << "no error";
     } catch (const ReportError& e) {
         EXPECT_NE(std::string(e.what()).find("before"), std::string::npos) << e.what();

@@ -222,6 +222,8 @@ TEST(IdentificationCodec, APayloadOfAnotherShapeIsRefusedNamingTheKey) {
         {"{" + ok + R"(,"readings":-1})", "\"readings\" must be a non-negative integer"},
         {R"({"converged":true,"residual_rms_um":0.1,"estimates":[{"name":"X0C","estimate":1}]})",
          "\"estimates[0].std\" is missing"},
+        {R"({"converged":true,"residual_rms_um":0.1,"estimates":[{"name":"X0C","unit":"mm","value":1}]})",
+         "\"estimates[0].value_std\" is missing"},
         {"{" + ok + R"(,"correlation":[[1,0]],"correlation_names":["X0C"]})", "\"correlation\" must be a square"},
         {"{" + ok + R"(,"model":{"params":{}}})", "\"model\" is not a model"},
     };

@@ -108,8 +108,9 @@ std::string GaugeSource::instrument_json() const {
         j["kind"] = gg::to_string(identity_->kind);
         j["maker"] = identity_->maker;
         j["model"] = identity_->model;
-        j["serial"] = identity_->serial;
-        j["firmware"] = identity_->firmware;
+        // Missing is null, not "" (docs/cli.md's vocabulary).
+        j["serial"] = identity_->serial.empty() ? nlohmann::json(nullptr) : nlohmann::json(identity_->serial);
+        j["firmware"] = identity_->firmware.empty() ? nlohmann::json(nullptr) : nlohmann::json(identity_->firmware);
         j["inch"] = identity_->inch;
         j["low_battery"] = identity_->low_battery;
     }
@@ -118,7 +119,7 @@ std::string GaugeSource::instrument_json() const {
     j["reading_rate_hz"] = st.rate_hz;
     j["target_rate_hz"] = bar_.target_rate_hz;
     j["calibrated_length_mm"] = bar_.calibrated_length_mm;
-    j["sign"] = bar_.sign;
+    j["sign"] = bar_.sign < 0 ? -1 : 1;
     j["readings"] = st.readings;
     j["not_ready"] = st.not_ready;
     j["out_of_range"] = st.out_of_range;

@@ -93,6 +93,9 @@ struct PlannedPoint {
     double nominal_mm = 0;                                 ///< expected bar length
 };
 
+/// "test 2 step 1 point 3": a point as the operator counts (tests and points from 1).
+std::string point_label(const PlannedPoint& p);
+
 struct Plan {
     MachineFile machine;
     PlanSpec spec;

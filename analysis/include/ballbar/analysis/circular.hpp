@@ -84,7 +84,11 @@ enum class Diag {
 };
 inline constexpr int kDiagCount = 15;
 std::string diagnostic_key(Diag diag, Plane plane);
+/// The diagnostic's unit as docs/cli.md's JSON vocabulary names it: "um", "um_per_m", "ppm", "ms",
+/// "mm", "hz".
 const char* diagnostic_unit(Diag diag);
+/// The same for the screen: "µm", "µm/m", "ppm", "ms", "mm", "Hz".
+const char* diagnostic_unit_symbol(Diag diag);
 /// Radial deviation (µm, peak) that one unit of the diagnostic causes in this test: the scale on
 /// which "an equivalent radial amplitude" is judged. 0 for pitch and frequency.
 double radial_um_per_unit(Diag diag, const TestSpec& test);

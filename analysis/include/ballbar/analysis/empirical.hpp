@@ -54,7 +54,8 @@ struct EmpiricalTerm {
     Param location = Param::X0C;  ///< location_drift: the drifting location error
 
     std::string name() const;
-    std::string unit() const;  ///< "rad", "mm", "mm/h", "rad/h", "mm/K", "1/K^2"
+    std::string unit()
+        const;  ///< "rad", "mm", "mm_per_h", "rad_per_h", "mm_per_K", "per_K2" (docs/cli.md's unit names)
     bool operator==(const EmpiricalTerm&) const = default;
 };
 

@@ -11,6 +11,18 @@
 
 namespace ballbar::analysis {
 
+/// NC text is ASCII: a blank is the "C" locale's space class, without a library call per character.
+constexpr bool is_nc_blank(char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
+}
+
+/// `s` without its leading and trailing blanks.
+constexpr std::string_view trim_nc_blanks(std::string_view s) {
+    while (!s.empty() && is_nc_blank(s.front())) s.remove_prefix(1);
+    while (!s.empty() && is_nc_blank(s.back())) s.remove_suffix(1);
+    return s;
+}
+
 /// Numbers larger than this are refused: no NC value is that large (1000 km, 10⁹ degrees).
 inline constexpr double kMaxNcNumber = 1e9;
 

@@ -84,7 +84,7 @@ void write_nc_footer(std::string& out, NcDialect dialect);
 /// Every word is in the controller's word format or refused: finite; X Y Z A B C I J K R at most 5
 /// integer digits (|value| < 100000); F positive and not rounded to zero, at most 6 (999999.9);
 /// P not negative, at most 8. Throws AnalysisError (nc_word_problem's reason) otherwise.
-void append_nc_number(std::string& out, char letter, double value, int decimals);
+void append_nc_number(std::string& out, char letter, double value, int decimals = 4);
 /// Empty when append_nc_number(letter, value, decimals) would write the word; otherwise why not
 /// ("NC word F: 1e-300 does not fit the controller's word format (> 0 to 999999.9, ...)").
 std::string nc_word_problem(char letter, double value, int decimals);

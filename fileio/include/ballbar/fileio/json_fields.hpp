@@ -94,4 +94,10 @@ class JsonFields {
     Fail fail_;
 };
 
+/// [x, y, z] of a vector (Eigen's or anything with x(), y(), z()): the writers' side of vec3.
+template <class Json, class Vec>
+Json vec3_json(const Vec& v) {
+    return Json::array({v.x(), v.y(), v.z()});
+}
+
 }  // namespace ballbar::fileio
