@@ -23,6 +23,7 @@
 #include "ballbar/device/uri.hpp"
 #include "ballbar/storage/sample_writer.hpp"
 #include "ballbar/storage/trace_file.hpp"
+#include "ballbar/workflow/circular_measure.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
 #include "ballbar/workflow/pty_emulator.hpp"
 #include "ballbar/workflow/session_io.hpp"
@@ -39,142 +40,6 @@ namespace {
 namespace acq = ballbar::acquisition;
 namespace circ = ballbar::analysis::circular;
 using ojson = nlohmann::ordered_json;
-
-// ---- storage ----------------------------------------------------------------------------------------
-
-/// Stores the circular procedure as it happens: every sample (SampleWriter), every transition (the
-/// audit trail), each run of the program as a result of kind "circular.attempt" with its window of
-/// stored samples; the good attempt's window is the session's trace (storage::load_trace). A new session
-/// is created only once the instrument is accepted for the test (`create`), so a refused test leaves
-/// none; the transitions before are kept for it.
-class CircleStoreSink : public acq::CircularSink {
-  public:
-    using Create = std::function<std::int64_t()>;
-    CircleStoreSink(storage::Store& store, Create create, double reference_length_mm)
-        : store_(store), create_(std::move(create)), reference_mm_(reference_length_mm) {}
-    CircleStoreSink(storage::Store& store, std::int64_t id, double reference_length_mm)
-        : store_(store), id_(id), reference_mm_(reference_length_mm) {
-        writer_.emplace(store_, id);
-    }
-
-    std::optional<std::int64_t> id() const { return id_; }
-    /// The instrument identified: its length is the samples' reference; it is the session's instrument.
-    void identified(const device::InstrumentInfo& info) {
-        reference_mm_ = info.calibrated_length_mm;
-        const storage::Instrument inst = workflow::stored_instrument(info);
-        instrument_ = inst;
-        if (id_) store_.set_instrument(*id_, inst);
-    }
-
-    void on_instrument_accepted(const acq::InstrumentStatus&) override { ensure(); }
-    /// Called when the session fits the test to the instrument (before on_instrument_accepted).
-    std::function<void(const circ::TestSpec&)> test_fitted;
-    void on_test_fitted(const circ::TestSpec& t) override {
-        if (test_fitted) test_fitted(t);
-    }
-    void on_transition(const acq::TransitionRecord& t) override {
-        const storage::ProcedureStep step{std::string(acq::to_string(t.from)), std::string(acq::to_string(t.to)),
-                                          std::string(acq::to_string(t.event)), t.detail, store_.now_iso8601()};
-        if (id_)
-            store_.add_procedure_step(*id_, step);
-        else
-            pending_.push_back(step);
-    }
-    void on_samples(std::span<const analysis::BarSample> samples) override {
-        ensure();
-        for (const auto& s : samples) {
-            const std::uint64_t stored = writer_->append(s);
-            if (runs_.empty() || s.seq != last_source_ + 1 || stored != last_stored_ + 1)
-                runs_.push_back({s.seq, stored});
-            last_source_ = s.seq;
-            last_stored_ = stored;
-        }
-    }
-    void on_attempt(const acq::CircularAttempt& a) override {
-        ensure();
-        writer_->flush();
-        ojson runs = ojson::array();
-        for (const auto& r : a.runs)
-            runs.push_back({{"direction", circ::direction_name(r.direction)},
-                            {"feed_in_end_s", r.feed_in_end_s},
-                            {"servo_lag_ms", r.lag_s * 1e3},
-                            {"first_seq", stored(r.first_seq)},
-                            {"last_seq", stored(r.last_seq)}});
-        ojson j = {{"attempt", a.attempt},
-                   {"good", a.good},
-                   {"why", text_or_null(a.why)},
-                   {"reference_length_mm", reference_mm_},
-                   {"first_seq", stored(a.first_seq)},
-                   {"last_seq", stored(a.last_seq)},
-                   {"runs", runs}};
-        store_.add_result(*id_, "circular.attempt", j.dump(), std::nullopt, "ballbar circle measure/1");
-    }
-    void finish(const acq::CircularSummary& sum) {
-        if (!id_) return;  // refused before a session was made: nothing to store
-        writer_->flush();
-        const std::int64_t id = *id_;
-        if (sum.interrupted) {
-            store_.transition(id, storage::SessionState::interrupted, "interrupted: " + sum.reason);
-        } else if (sum.final_state == acq::State::Done) {
-            store_.finish_session(id);
-        } else if (sum.final_state == acq::State::Aborted) {
-            store_.abort_session(id, sum.reason.empty() ? "abort" : "abort: " + sum.reason);
-        } else {
-            store_.fail_session(id, "fail: " + sum.reason);
-        }
-    }
-
-  private:
-    void ensure() {
-        if (id_) return;
-        id_ = create_();
-        writer_.emplace(store_, *id_);
-        if (instrument_) store_.set_instrument(*id_, *instrument_);
-        for (const auto& step : pending_) store_.add_procedure_step(*id_, step);
-        pending_.clear();
-    }
-    std::int64_t stored(std::uint64_t source_seq) const {
-        auto it = std::upper_bound(runs_.begin(), runs_.end(), source_seq,
-                                   [](std::uint64_t q, const SeqRun& r) { return q < r.source; });
-        if (it == runs_.begin()) return -1;
-        --it;
-        return static_cast<std::int64_t>(it->stored + (source_seq - it->source));
-    }
-    struct SeqRun {
-        std::uint64_t source = 0, stored = 0;
-    };
-    storage::Store& store_;
-    Create create_;
-    std::optional<std::int64_t> id_;
-    double reference_mm_;
-    std::optional<storage::SampleWriter> writer_;
-    std::optional<storage::Instrument> instrument_;
-    std::vector<storage::ProcedureStep> pending_;
-    std::vector<SeqRun> runs_;
-    std::uint64_t last_source_ = 0, last_stored_ = 0;
-};
-
-/// A new circular session holding the test header, as `import` makes one (plus the part program).
-std::int64_t create_circular_session(storage::Store& store, const circ::TestSpec& test, analysis::NcDialect dialect,
-                                     double dwell_s, storage::SessionSource source, const std::string& operator_name,
-                                     const std::string& notes) {
-    storage::NewSession ns;
-    ns.machine.name = "circular test";
-    ns.source = source;
-    ns.operator_name = operator_name;
-    ns.procedure = "circular";
-    ns.notes = notes;
-    const ojson meta = {{"format", "ballbar-trace/1"},
-                        {"test", ojson::parse(storage::test_json(test))},
-                        {"reference_length_mm", test.radius_mm},
-                        {"has_bar_temp", true},
-                        {"part_program", {{"dialect", analysis::to_string(dialect)}, {"dwell_s", dwell_s}}},
-                        {"extra", ojson::object()}};
-    ns.metadata_json = meta.dump();
-    const std::int64_t id = store.create_session(ns);
-    store.start_session(id);
-    return id;
-}
 
 // ---- the operator -------------------------------------------------------------------------------------
 
@@ -294,39 +159,6 @@ class CircleOperator : public acq::Operator {
 
 // ---- after the procedure ---------------------------------------------------------------------------
 
-/// The stored session's trace analysed as `circle analyze SESSION` does, the result stored with it.
-std::pair<circ::CircularResult, storage::TraceFile> analyze_stored(storage::Store& store, std::int64_t id,
-                                                                   ojson* result_json) {
-    storage::TraceFile trace = storage::load_trace(store, id);
-    circ::CircularResult r;
-    try {
-        r = circ::analyze_circular(trace.test, trace.samples);
-    } catch (const circ::CircularError& e) {
-        throw Error(ErrorCategory::failed, "session " + std::to_string(id) + ": the stored trace: " + e.what());
-    }
-    ojson j = circle_result_json(r, trace, std::nullopt);
-    store.add_result(id, "circular", j.dump(), std::nullopt, "ballbar circular/1");
-    j["session"] = id;
-    if (result_json) *result_json = j;
-    return {r, trace};
-}
-
-void outcome(const acq::CircularSummary& sum, std::optional<std::int64_t> id, const std::string& resume_hint) {
-    if (sum.final_state == acq::State::Done) return;
-    if (!id) {  // refused or failed before the session was made: nothing stored
-        throw Error(sum.refused ? ErrorCategory::bad_input : ErrorCategory::failed, sum.reason);
-    }
-    const std::string session = "session " + std::to_string(*id);
-    if (sum.interrupted)
-        throw Error(ErrorCategory::interrupted,
-                    session + " interrupted after " + std::to_string(sum.samples) + " samples (" + sum.reason +
-                        "); everything measured is stored. Continue it with: " + resume_hint);
-    if (sum.refused) throw Error(ErrorCategory::bad_input, session + ": " + sum.reason);
-    if (sum.final_state == acq::State::Aborted)
-        throw Error(ErrorCategory::interrupted, session + " aborted: " + sum.reason);
-    throw Error(ErrorCategory::failed, session + " failed: " + sum.reason);
-}
-
 // ---- circle measure ------------------------------------------------------------------------------------
 
 struct MeasureOptions {
@@ -361,41 +193,23 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     // The database is opened once the request is known to be good: a refused command creates none
     // (a resumed session must be in an existing one).
     std::optional<storage::Store> opened;
-    circ::TestSpec test;
-    std::optional<std::int64_t> resumed;
-    int first_attempt = 1;
-    auto dialect = analysis::parse_nc_dialect(o.dialect);
+    const auto dialect = analysis::parse_nc_dialect(o.dialect);
     if (!dialect) throw Error(ErrorCategory::bad_input, "--dialect must be fanuc or linuxcnc");
-    double dwell_s = o.dwell_s;
+    const double dwell_s = o.dwell_s;
     if (!(dwell_s >= 0.2 && dwell_s <= 60)) throw Error(ErrorCategory::bad_input, "--dwell must be 0.2 .. 60 s");
+    workflow::PreparedCircular prepared;
+    prepared.dialect = *dialect;
+    prepared.dwell_s = dwell_s;
     try {
         if (!o.resume.empty()) {
             storage::Store& store = opened.emplace(existing_db_path(globals));
-            const std::int64_t id = store.find_session(o.resume);
-            const storage::SessionInfo before = store.session(id);
-            if (before.procedure != "circular")
-                throw Error(ErrorCategory::bad_input, "session " + std::to_string(id) +
-                                                          " is not a circular test (procedure \"" + before.procedure +
-                                                          "\"): resume it with ballbar measure");
-            if (!before.resumable())
-                throw Error(ErrorCategory::bad_input, "session " + std::to_string(id) + " is " +
-                                                          std::string(storage::to_string(before.state)) +
-                                                          ": only an interrupted or failed session can be resumed");
+            prepared = workflow::resume_circular_session(store, o.resume, *dialect, dwell_s);
+            const storage::SessionInfo& before = *prepared.before;
             // With --json, standard output is the events alone (docs/cli.md): the words go to standard error.
-            (o.json ? std::cerr : std::cout) << "Session " << id << " is " << storage::to_string(before.state)
+            (o.json ? std::cerr : std::cout) << "Session " << before.id << " is " << storage::to_string(before.state)
                                              << (before.reason.empty() ? "" : ": " + before.reason) << std::endl;
-            test = storage::load_trace(store, id).test;
-            const ojson meta = ojson::parse(before.metadata_json.empty() ? "{}" : before.metadata_json);
-            if (meta.contains("part_program")) {
-                dialect = analysis::parse_nc_dialect(meta["part_program"].value("dialect", "fanuc"));
-                dwell_s = meta["part_program"].value("dwell_s", dwell_s);
-            }
-            for (const auto& r : store.results(id))
-                if (r.kind == "circular.attempt") ++first_attempt;
-            store.resume_session(id);
-            resumed = id;
         } else {
-            test = test_from_options(o);
+            prepared.test = test_from_options(o);
             opened.emplace(resolve_db_path(globals));
         }
     } catch (const storage::StorageError& e) {
@@ -405,10 +219,9 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
         throw Error(ErrorCategory::bad_input, e.what());
     }
     storage::Store& store = *opened;
-    const auto nc_dialect = dialect.value_or(analysis::NcDialect::Fanuc);
     std::string program;
     try {
-        program = acq::circular_program(test, nc_dialect, dwell_s);  // every word in the controller's format
+        program = acq::circular_program(prepared.test, prepared.dialect, prepared.dwell_s);  // the controller's format
     } catch (const acq::PlanError& e) {
         throw Error(ErrorCategory::bad_input, e.what());
     }
@@ -418,72 +231,48 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     const auto program_path = [&o](std::int64_t id) {
         return o.program_file.empty() ? "ballbar-session-" + std::to_string(id) + ".nc" : o.program_file;
     };
-    CircleOperator op(mode, std::cin, std::cout, globals.color, resumed ? program_path(*resumed) : "", program);
+    CircleOperator op(mode, std::cin, std::cout, globals.color, prepared.session ? program_path(*prepared.session) : "",
+                      program);
+    const InterruptGuard interrupt;
+    workflow::CircularMeasureOptions mo;
+    mo.device_uri = o.device;
+    mo.operator_name = o.operator_name;
+    mo.stop = InterruptGuard::flag();
+    // A test the operator did not shape (no --test, no --feed-in) takes the feed-in the bar's range holds;
+    // the program and the stored header follow it.
+    mo.fit_feed_in = o.test_file.empty() && !o.feed_in_given;
     // The session is made once the instrument is accepted for the test: a refused test leaves none.
-    const auto create = [&] {
-        const std::int64_t id = create_circular_session(
-            store, test, nc_dialect, dwell_s,
-            o.device.rfind("emulator:", 0) == 0 ? storage::SessionSource::emulator : storage::SessionSource::device,
-            o.operator_name, "circle measure");
+    mo.on_session_created = [&](std::int64_t id, const circ::TestSpec& test) {
         op.set_program_path(program_path(id));
         if (!o.json)
             std::cout << "Session " << id << ": circular test in " << circ::plane_name(test.plane) << ", radius "
                       << test.radius_mm << " mm, feed " << test.feed_mm_min << " mm/min, " << test.runs.size()
                       << " runs." << std::endl;
-        return id;
     };
-    std::optional<CircleStoreSink> sink_storage;
-    if (resumed)
-        sink_storage.emplace(store, *resumed, test.radius_mm);
-    else
-        sink_storage.emplace(store, CircleStoreSink::Create(create), test.radius_mm);
-    CircleStoreSink& sink = *sink_storage;
-    const std::string uri = o.device;
-    workflow::DeviceSource source([uri] {
-        try {
-            return device::open_transport(uri);
-        } catch (const std::invalid_argument& e) {
-            throw acq::SourceError(e.what());
-        }
-    });
-    source.on_identified = [&sink](const device::InstrumentInfo& info) { sink.identified(info); };
-    const auto gauge =
-        workflow::make_gauge_source(uri, test.radius_mm);  // a digital gauge on the bar (gauge_source.hpp)
-    const InterruptGuard interrupt;
-    acq::CircularOptions options;
-    options.stop = InterruptGuard::flag();
-    options.dwell_s = dwell_s;
-    options.first_attempt = first_attempt;
-    // A test the operator did not shape (no --test, no --feed-in, not resumed) takes the feed-in the
-    // bar's range holds; the program and the stored header follow it.
-    options.fit_feed_in = !resumed && o.test_file.empty() && !o.feed_in_given;
-    sink.test_fitted = [&](const circ::TestSpec& fitted) {
-        test = fitted;
-        op.set_program(acq::circular_program(test, nc_dialect, dwell_s));
+    mo.on_test_fitted = [&](const circ::TestSpec& fitted) {
+        op.set_program(acq::circular_program(fitted, prepared.dialect, prepared.dwell_s));
     };
-    const std::uint64_t first_seq = resumed ? store.next_seq(*resumed) : 0;
-    acq::CircularSession session(test, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
-    const acq::CircularSummary sum = session.run();
-    sink.finish(sum);
-    if (gauge && sink.id()) workflow::store_gauge_instrument(store, *sink.id(), *gauge, first_seq);
-    outcome(
-        sum, sink.id(),
-        "ballbar circle measure --resume " + (sink.id() ? std::to_string(*sink.id()) : "") + " --device " + o.device);
-    const std::int64_t id = *sink.id();
-    ojson j;
-    const auto [result, trace] = analyze_stored(store, id, &j);
+    const workflow::CircularMeasureResult run = workflow::measure_circular(store, prepared, op, mo);
+    workflow::throw_unless_completed(run.summary, run.session_id,
+                                     "ballbar circle measure --resume " +
+                                         (run.session_id ? std::to_string(*run.session_id) : "") + " --device " +
+                                         o.device);
+    const std::int64_t id = *run.session_id;
+    const workflow::StoredCircularResult& stored = *run.stored;
     if (o.json) {
+        ojson j = ojson::parse(stored.payload_json);
+        j["session"] = id;
         std::cout << ojson{{"event", "done"},
                            {"session", id},
-                           {"samples", sum.samples},
-                           {"attempts", sum.attempts},
+                           {"samples", run.summary.samples},
+                           {"attempts", run.summary.attempts},
                            {"result", j}}
                          .dump()
                   << std::endl;
     } else {
-        print_circle_result(std::cout, result, trace, std::nullopt);
-        std::cout << "Session " << id << " completed (" << sum.samples << " samples, " << sum.attempts
-                  << (sum.attempts == 1 ? " run" : " runs") << " of the program); result stored.\n";
+        print_circle_result(std::cout, stored.result, stored.trace, std::nullopt);
+        std::cout << "Session " << id << " completed (" << run.summary.samples << " samples, " << run.summary.attempts
+                  << (run.summary.attempts == 1 ? " run" : " runs") << " of the program); result stored.\n";
     }
     return kExitOk;
 }
@@ -558,7 +347,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     storage::StoreOptions so;
     so.sync_full = false;
     storage::Store store(resolve_db_path(globals), so);
-    const std::int64_t id = create_circular_session(
+    const std::int64_t id = workflow::create_circular_session(
         store, test, dialect, dwell_s, storage::SessionSource::emulator, "demo",
         "ballbar demo --test circular --plane " + o.plane + " --seed " + std::to_string(o.seed));
     const bool show = !o.json && ::isatty(STDERR_FILENO);
@@ -569,19 +358,19 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     std::ostringstream discard;
     CircleOperator op(show ? CircleOperator::Mode::Scripted : CircleOperator::Mode::Quiet, std::cin,
                       show ? std::cerr : static_cast<std::ostream&>(discard), false, "", "");
-    workflow::DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
-    CircleStoreSink sink(store, id, test.radius_mm);
-    source.on_identified = [&sink](const device::InstrumentInfo& info) { sink.identified(info); };
-    acq::CircularOptions options;
-    options.dwell_s = dwell_s;
-    acq::CircularSession session(test, source, sink, op, options);
-    const acq::CircularSummary sum = session.run();
-    sink.finish(sum);
+    workflow::PreparedCircular prepared;
+    prepared.session = id;
+    prepared.test = test;
+    prepared.dialect = dialect;
+    prepared.dwell_s = dwell_s;
+    workflow::CircularMeasureOptions measure;
+    measure.device_uri = "emulator:";
+    measure.open_transport = [&emulator] { return device::open_transport("serial:" + emulator.path()); };
+    const workflow::CircularMeasureResult run = workflow::measure_circular(store, prepared, op, measure);
     emulator.halt();
-    outcome(sum, id, "ballbar demo --test circular (a demo session is not resumed)");
-
-    ojson stored;
-    const auto [result, trace] = analyze_stored(store, id, &stored);
+    workflow::throw_unless_completed(run.summary, id, "ballbar demo --test circular (a demo session is not resumed)");
+    const acq::CircularSummary& sum = run.summary;
+    const circ::CircularResult& result = run.stored->result;
     const auto checks =
         device::compare_with_truth(result, emulator.emulator().continuous()->truth(test.plane, test.radius_mm));
     bool pass = true;
@@ -599,23 +388,24 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
                          {"note", text_or_null(c.note)}});
     }
     const auto& ec = emulator.emulator().counters();
-    ojson out = {{"session", id},
-                 {"plane", circ::plane_name(test.plane)},
-                 {"radius_mm", test.radius_mm},
-                 {"feed_mm_min", test.feed_mm_min},
-                 {"data_arc_deg", arc},
-                 {"attempts", sum.attempts},
-                 {"samples", sum.samples},
-                 {"pauses", sum.pauses},
-                 {"gaps", sum.gaps},
-                 {"lost_samples", sum.lost_samples},
-                 {"duplicates_dropped", sum.duplicates_dropped},
-                 {"dropped_frames", ec.dropped_frames},
-                 {"replayed_frames", ec.replayed_frames},
-                 {"runs", ojson::array()},
-                 {"bidirectional_circularity_um", stored["bidirectional_circularity_um"]},
-                 {"diagnostics", diags},
-                 {"pass", pass}};
+    ojson out = {
+        {"session", id},
+        {"plane", circ::plane_name(test.plane)},
+        {"radius_mm", test.radius_mm},
+        {"feed_mm_min", test.feed_mm_min},
+        {"data_arc_deg", arc},
+        {"attempts", sum.attempts},
+        {"samples", sum.samples},
+        {"pauses", sum.pauses},
+        {"gaps", sum.gaps},
+        {"lost_samples", sum.lost_samples},
+        {"duplicates_dropped", sum.duplicates_dropped},
+        {"dropped_frames", ec.dropped_frames},
+        {"replayed_frames", ec.replayed_frames},
+        {"runs", ojson::array()},
+        {"bidirectional_circularity_um", result.bidirectional_um ? ojson(*result.bidirectional_um) : ojson(nullptr)},
+        {"diagnostics", diags},
+        {"pass", pass}};
     for (const auto& r : result.runs)
         out["runs"].push_back({{"direction", circ::direction_name(r.direction)}, {"circularity_um", r.circularity_um}});
     if (o.json) {

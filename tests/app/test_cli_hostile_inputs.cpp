@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "../sanitizers.hpp"
 #include "cli_harness.hpp"
 
 using namespace ballbar::test;
@@ -26,17 +27,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;  // ASan reserves terabytes of address space: no ulimit -v then
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
+using ballbar::test::kSanitized;  // ASan reserves terabytes of address space: no ulimit -v then
 
 const std::string kData = BALLBAR_TEST_DATA_DIR;
 

@@ -6,23 +6,14 @@
 
 #include <random>
 
+#include "../sanitizers.hpp"
 #include "accuracy.hpp"
 
 namespace {
 
 using namespace ballbar::testgen;
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
+using ballbar::test::kSanitized;
 
 TEST(CircularAccuracy, RandomTracesFromTheIndependentGenerator) {
     std::mt19937_64 rng(20261201);

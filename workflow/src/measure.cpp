@@ -2,7 +2,6 @@
 #include "ballbar/workflow/measure.hpp"
 
 #include "ballbar/acquisition/bar_check.hpp"
-#include "ballbar/device/uri.hpp"
 #include "ballbar/workflow/error.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
 #include "ballbar/workflow/session_io.hpp"
@@ -55,14 +54,7 @@ acq::SessionSummary measure_ssm(storage::Store& store, const PreparedSession& pr
     const std::int64_t id = prepared.id;
     const acq::Plan& plan = prepared.plan;
     const std::string uri = o.device_uri;
-    DeviceSource source([uri, open = o.open_transport] {
-        if (open) return open();
-        try {
-            return device::open_transport(uri);
-        } catch (const std::invalid_argument& e) {
-            throw acq::SourceError(e.what());
-        }
-    });
+    DeviceSource source(device_opener(uri, o.open_transport));
     source.on_identified = [&store, id, &plan, &o](const device::InstrumentInfo& info) {
         store.set_instrument(id, stored_instrument(info));  // sessions show, the report
         const std::string mismatch = acq::bar_length_mismatch(plan.spec.bar_length_mm, info.calibrated_length_mm,

@@ -12,6 +12,7 @@
 
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
+#include "ballbar/device/uri.hpp"
 
 namespace ballbar::workflow {
 
@@ -282,6 +283,17 @@ std::vector<acq::CapturedPoint> load_points(storage::Store& store, std::int64_t 
         }
     }
     return out;
+}
+
+DeviceSource::Opener device_opener(std::string uri, DeviceSource::Opener override) {
+    return [uri = std::move(uri), open = std::move(override)]() -> std::unique_ptr<device::Transport> {
+        if (open) return open();
+        try {
+            return device::open_transport(uri);
+        } catch (const std::invalid_argument& e) {
+            throw acquisition::SourceError(e.what());
+        }
+    };
 }
 
 }  // namespace ballbar::workflow

@@ -51,6 +51,11 @@ class DeviceSource : public acquisition::SampleSource {
     std::uint64_t lost_frames_ = 0;
 };
 
+/// How a use case opens the instrument at `uri`: `override` when given (an emulator in process, for tests
+/// and demos), else the URI's transport; a URI that names no transport is a SourceError (the session says
+/// so as a link failure).
+DeviceSource::Opener device_opener(std::string uri, DeviceSource::Opener override = {});
+
 /// Stores a session as it happens: samples through a SampleWriter, points, the fine-grained audit
 /// trail (the procedure's steps) and the results (kinds "acquisition.plan", "ssm", "orientation").
 class StoreSink : public acquisition::SessionSink {

@@ -1,0 +1,205 @@
+// SPDX-License-Identifier: MIT
+// The circular test's measurement as a use case, in process: the emulated machine (its continuous errors)
+// and instrument on simulated time, the part program written where the machine loads it; a completed
+// session with its analysed result stored, a run stopped by the front end's flag and taken up again, and
+// the refusals of a resume.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "ballbar/acquisition/circle_program.hpp"
+#include "ballbar/device/emulator.hpp"
+#include "ballbar/device/pipe.hpp"
+#include "ballbar/storage/trace_file.hpp"
+#include "ballbar/workflow/circular_measure.hpp"
+#include "ballbar/workflow/error.hpp"
+
+namespace ballbar::workflow {
+namespace {
+
+namespace acq = ballbar::acquisition;
+namespace circ = ballbar::analysis::circular;
+namespace fs = std::filesystem;
+
+struct Dir {
+    fs::path path;
+    Dir() {
+        char tmpl[] = "/tmp/ballbar-circular-wf-XXXXXX";
+        path = ::mkdtemp(tmpl);
+    }
+    ~Dir() { fs::remove_all(path); }
+};
+
+/// An XY test of R 100 mm at 1000 mm/min, both directions, feed-in 0.8 mm (the bar's ±1 mm range).
+circ::TestSpec xy_test() {
+    return storage::parse_test_json(
+        R"({"kind": "circular", "plane": "XY", "radius_mm": 100.0, "centre_mm": [0, 0, 0], "feed_mm_min": 1000.0,
+            "feed_in_mm": 0.8, "runs": [{"direction": "ccw", "start_deg": 0, "overshoot_deg": 45, "data_arc_deg": 360},
+                                        {"direction": "cw", "start_deg": 450, "overshoot_deg": 45, "data_arc_deg": 360}]})");
+}
+
+/// The emulated machine with 3 µm of X backlash and 25 µm/m of XY squareness, standing at the test's
+/// start (R + feed-in on +X), running the program at `program` when told to start.
+fs::path emulator_config(const Dir& d, const fs::path& program) {
+    const fs::path p = d.path / "emulator.json";
+    std::ofstream(p)
+        << R"({"time": "simulated", "seed": 5, "instrument": {"calibrated_length_mm": 100, "noise_um": 0.15},
+        "machine": {"start": {"X_mm": 100.8, "Y_mm": 0, "Z_mm": 0}},
+        "program": {"file": ")"
+        << program.string() << R"(", "start": "cycle_start"},
+        "continuous": {"servo_lag_ms": {"X": 8, "Y": 5}, "backlash_um": {"X": 3},
+                       "squareness_um_per_m": {"XY": 25}}})";
+    return p;
+}
+
+/// Answers yes, and writes the part program where the machine loads it when told to run it. Sets `stop`
+/// once `stop_after_runs` runs were started (a front end's stop button).
+class ProgramOperator : public acq::Operator {
+  public:
+    ProgramOperator(fs::path path, std::string program, std::atomic<bool>* stop = nullptr, int stop_after_runs = 0)
+        : path_(std::move(path)), program_(std::move(program)), stop_(stop), stop_after_(stop_after_runs) {}
+    bool confirm(std::string_view, std::string_view) override { return true; }
+    std::size_t choose(const acq::Choice& c) override { return c.default_option; }
+    void message(std::string_view) override {}
+    acq::PointFailureAction point_failed(const acq::CapturedPoint&, std::string_view) override {
+        return acq::PointFailureAction::Abort;
+    }
+    void wait_at_point(const acq::PlannedPoint&) override {}
+    void progress(const acq::Progress&) override {}
+    void run_program(const analysis::NcProgram&, std::span<const std::size_t>, bool) override {}
+    void program_stop(const acq::ProgramStop&) override {}
+    void run_part_program(std::string_view, bool) override {
+        std::ofstream(path_) << program_;
+        ++runs;
+        if (stop_ && stop_after_ > 0 && runs >= stop_after_) stop_->store(true);
+    }
+    int runs = 0;
+
+  private:
+    fs::path path_;
+    std::string program_;
+    std::atomic<bool>* stop_;
+    int stop_after_;
+};
+
+CircularMeasureOptions simulated(const fs::path& config) {
+    CircularMeasureOptions o;
+    o.device_uri = "emulator:" + config.string();
+    o.open_transport = [config] {
+        return std::make_unique<device::PipeTransport>(
+            std::make_unique<device::Emulator>(device::load_emulator_config(config.string())),
+            device::Pacing::Simulated);
+    };
+    return o;
+}
+
+double diagnostic(const std::string& payload, const std::string& key) {
+    const nlohmann::json result = nlohmann::json::parse(payload);  // outlives the loop over its list
+    for (const auto& d : result.at("diagnostics"))
+        if (d.at("key").get<std::string>() == key) return d.at("value").get<double>();
+    ADD_FAILURE() << key << " not in " << payload;
+    return 0;
+}
+
+TEST(CircularMeasureUseCase, ANewSessionIsMeasuredAnalysedAndStored) {
+    Dir d;
+    storage::Store store((d.path / "c.db").string());
+    const fs::path program = d.path / "circle.nc";
+    PreparedCircular p;
+    p.test = xy_test();
+    ProgramOperator op(program, acq::circular_program(p.test, p.dialect, p.dwell_s));
+    CircularMeasureOptions o = simulated(emulator_config(d, program));
+    std::optional<std::int64_t> created;
+    o.on_session_created = [&created](std::int64_t id, const circ::TestSpec&) { created = id; };
+    const CircularMeasureResult r = measure_circular(store, p, op, o);
+    ASSERT_EQ(r.summary.final_state, acq::State::Done) << r.summary.reason;
+    ASSERT_TRUE(r.session_id.has_value());
+    EXPECT_EQ(created, r.session_id) << "the front end hears of the session when it is made";
+    EXPECT_EQ(store.session(*r.session_id).state, storage::SessionState::completed);
+    EXPECT_EQ(store.session(*r.session_id).source, storage::SessionSource::emulator);
+    ASSERT_TRUE(r.stored.has_value());
+    EXPECT_NEAR(diagnostic(r.stored->payload_json, "backlash_x_um"), 3.0, 0.6);
+    EXPECT_NEAR(diagnostic(r.stored->payload_json, "squareness_um_per_m"), 25.0, 5.0);
+    int circular = 0;
+    for (const auto& res : store.results(*r.session_id)) circular += res.kind == "circular";
+    EXPECT_EQ(circular, 1) << "the analysed result is stored once";
+    EXPECT_NO_THROW(throw_unless_completed(r.summary, r.session_id, "-"));
+    // A completed session is not taken up again, and nothing changes.
+    try {
+        (void)resume_circular_session(store, std::to_string(*r.session_id));
+        FAIL() << "resumed a completed session";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.category(), ErrorCategory::bad_input) << e.what();
+    }
+    EXPECT_EQ(store.session(*r.session_id).state, storage::SessionState::completed);
+}
+
+TEST(CircularMeasureUseCase, AStoppedRunIsTakenUpAndCompleted) {
+    Dir d;
+    storage::Store store((d.path / "c.db").string());
+    const fs::path program = d.path / "circle.nc";
+    PreparedCircular p;
+    p.test = xy_test();
+    std::atomic<bool> stop{false};
+    ProgramOperator op(program, acq::circular_program(p.test, p.dialect, p.dwell_s), &stop, 1);
+    CircularMeasureOptions o = simulated(emulator_config(d, program));
+    o.stop = &stop;
+    const CircularMeasureResult first = measure_circular(store, p, op, o);
+    ASSERT_TRUE(first.summary.interrupted) << first.summary.reason;
+    ASSERT_TRUE(first.session_id.has_value());
+    const std::int64_t id = *first.session_id;
+    EXPECT_EQ(store.session(id).state, storage::SessionState::interrupted);
+    EXPECT_FALSE(first.stored.has_value()) << "nothing analysed before the test is complete";
+    try {
+        throw_unless_completed(first.summary, first.session_id, "the resume line");
+        FAIL() << "an interrupted run is not a completed one";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.category(), ErrorCategory::interrupted);
+        EXPECT_NE(std::string(e.what()).find("the resume line"), std::string::npos) << e.what();
+    }
+
+    const PreparedCircular again = resume_circular_session(store, std::to_string(id));
+    ASSERT_EQ(again.session, id);
+    ASSERT_TRUE(again.before.has_value());
+    EXPECT_EQ(again.before->state, storage::SessionState::interrupted);
+    EXPECT_EQ(again.test.radius_mm, 100.0) << "the stored test";
+    EXPECT_GE(again.first_attempt, 1);
+    ProgramOperator op2(program, acq::circular_program(again.test, again.dialect, again.dwell_s));
+    const CircularMeasureResult second = measure_circular(store, again, op2, simulated(d.path / "emulator.json"));
+    ASSERT_EQ(second.summary.final_state, acq::State::Done) << second.summary.reason;
+    EXPECT_EQ(second.session_id, id) << "the same session";
+    EXPECT_EQ(store.session(id).state, storage::SessionState::completed);
+    ASSERT_TRUE(second.stored.has_value());
+    EXPECT_NEAR(diagnostic(second.stored->payload_json, "backlash_x_um"), 3.0, 0.6);
+}
+
+TEST(CircularMeasureUseCase, OnlyACircularSessionThatExistsIsTakenUp) {
+    Dir d;
+    storage::Store store((d.path / "c.db").string());
+    try {
+        (void)resume_circular_session(store, "42");
+        FAIL() << "no error";
+    } catch (const std::exception& e) {
+        EXPECT_EQ(category_of(e), ErrorCategory::not_found) << e.what();
+    }
+    storage::NewSession ns;
+    ns.procedure = "ssm-two-step";
+    const std::int64_t ssm = store.create_session(ns);
+    store.start_session(ssm);
+    store.transition(ssm, storage::SessionState::interrupted, "test");
+    try {
+        (void)resume_circular_session(store, std::to_string(ssm));
+        FAIL() << "took up an SSM session";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.category(), ErrorCategory::bad_input);
+        EXPECT_NE(std::string(e.what()).find("not a circular test"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(store.session(ssm).state, storage::SessionState::interrupted) << "nothing changed";
+}
+
+}  // namespace
+}  // namespace ballbar::workflow
