@@ -19,7 +19,7 @@ namespace {
 constexpr double kRelTol = 1e-10;        // Table 1 golden values, relative
 constexpr double kExactTol_rad = 1e-12;  // exact inversion on model-consistent data
 
-nlohmann::json load_table1() {
+nlohmann::json load_table1_orientation() {
     std::ifstream in(std::string(BALLBAR_TEST_DATA_DIR) + "/table1.json");
     EXPECT_TRUE(in.good()) << "tests/data/table1.json missing";
     return nlohmann::json::parse(in);
@@ -55,7 +55,7 @@ TEST(Orientation, EachTestDeterminesTheAnglesOfItsType) {
 }
 
 TEST(Orientation, Table1AllFiveCasesFirstOrderAndExact) {
-    const auto table = load_table1();
+    const auto table = load_table1_orientation();
     ASSERT_EQ(table.size(), 5u);
     for (const auto& c : table) {
         const std::string name = "case " + std::to_string(c["case"].get<int>());
@@ -87,7 +87,7 @@ TEST(Orientation, Table1AllFiveCasesFirstOrderAndExact) {
 
 TEST(Orientation, Table1PrintedCalculatedErrorsAtFiveDigits) {
     // The seed prints Δβ' = 0°, 0.07995°, 0.09985°, 0.08992°, 0.09985°: Eq. (6)'s second-order bias.
-    const auto table = load_table1();
+    const auto table = load_table1_orientation();
     const double printed_dbeta_deg[5] = {0, 0.07995, 0.09985, 0.08992, 0.09985};
     const double printed_dalpha_deg[5] = {0.1, 0, 0.12, 0.15, 0.1};
     for (std::size_t i = 0; i < 5; ++i) {

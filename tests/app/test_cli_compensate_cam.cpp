@@ -47,20 +47,20 @@ double dot(V a, V b) {
 V cross(V a, V b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-double norm(V a) {
+double norm_compensate_cam(V a) {
     return std::sqrt(dot(a, a));
 }
 /// Rodrigues: v turned by angle t about the unit axis d.
 V turn(V d, double t, V v) {
     return std::cos(t) * v + std::sin(t) * cross(d, v) + ((1 - std::cos(t)) * dot(d, v)) * d;
 }
-V rx(double t, V v) {
+V rx_compensate_cam(double t, V v) {
     return turn({1, 0, 0}, t, v);
 }
 V ry(double t, V v) {
     return turn({0, 1, 0}, t, v);
 }
-V rz(double t, V v) {
+V rz_compensate_cam(double t, V v) {
     return turn({0, 0, 1}, t, v);
 }
 
@@ -92,8 +92,8 @@ struct Seen {
 Seen actual_tool_in_table(const Errors& e, double X, double Y, double Z, double A, double C, V tool) {
     const double x = X * (1 + e.EXX), y = Y * (1 + e.EYY), z = Z;
     const V m = V{x - y * e.C0Y, y, z} + tool;  // the linear axes, then the tool
-    const V a_dir = rz(e.C0A, ry(e.B0A, {1, 0, 0}));
-    const V c_dir = ry(e.B0C, rx(e.A0C, {0, 0, 1}));
+    const V a_dir = rz_compensate_cam(e.C0A, ry(e.B0A, {1, 0, 0}));
+    const V c_dir = ry(e.B0C, rx_compensate_cam(e.A0C, {0, 0, 1}));
     const V qa = kPivot + V{0, e.Y0A, e.Z0A};
     const V p0 = kPivot + kCOffset;
     const V qc = p0 + V{e.X0C, e.Y0C, 0};
@@ -108,7 +108,7 @@ Seen actual_tool_in_table(const Errors& e, double X, double Y, double Z, double 
 /// The controller's nominal tool-centre-point kinematics: workpiece (world = machine at A = C = 0)
 /// point w to the machine position of the tool point.
 V tcp_machine(V w, double A, double C) {
-    return kPivot + rx(A, kCOffset + rz(C, w - kPivot - kCOffset));
+    return kPivot + rx_compensate_cam(A, kCOffset + rz_compensate_cam(C, w - kPivot - kCOffset));
 }
 
 // ---- the test's own reading of the NC subset the programs use -----------------------------------
@@ -230,7 +230,7 @@ Seen run_block(const Errors& e, const BlockEnd& b, const Table& t) {
     return actual_tool_in_table(e, u.x, u.y, u.z, A, C, tool);
 }
 
-std::string model_json(const Errors& e) {
+std::string model_json_compensate_cam(const Errors& e) {
     return json{{"format", "ballbar-model/1"},
                 {"machine",
                  {{"type", "TTTRR"},
@@ -259,7 +259,7 @@ struct Outcome {
 };
 
 Outcome compensate_and_run(const TempDir& d, const std::string& program, const Errors& e, const std::string& flags) {
-    std::ofstream(d.path / "model.json") << model_json(e);
+    std::ofstream(d.path / "model.json") << model_json_compensate_cam(e);
     std::ofstream(d.path / "offsets.json") << kOffsets;
     std::ofstream(d.path / "in.ngc") << program;
     const CliRun r =
@@ -279,10 +279,10 @@ Outcome compensate_and_run(const TempDir& d, const std::string& program, const E
         const BlockEnd& got = o.out.at(n);
         const Seen intended = run_block(none, want, t);  // the nominal machine at the input program
         const Seen actual = run_block(e, got, t);        // the erroneous machine at the output
-        o.max_position_mm = std::max(o.max_position_mm, norm(actual.position - intended.position));
+        o.max_position_mm = std::max(o.max_position_mm, norm_compensate_cam(actual.position - intended.position));
         if (std::abs(std::sin(want.p[3] + want.off[3])) >
             0.2)  // away from the A = 0 singularity (and the bound near it)
-            o.max_axis_rad = std::max(o.max_axis_rad, norm(cross(actual.axis, intended.axis)));
+            o.max_axis_rad = std::max(o.max_axis_rad, norm_compensate_cam(cross(actual.axis, intended.axis)));
         if (want.arc) {
             EXPECT_GT(got.lines, 1) << "N" << n << ": the arc was not linearised";
         }
@@ -369,7 +369,8 @@ TEST(CliCompensateCam, UncompensatedMachineMissesByTensOfMicrometres) {
     const auto in = read_program(cam_sample(), t);
     double worst = 0;
     for (const auto& [n, b] : in)
-        worst = std::max(worst, norm(run_block(seed_like(), b, t).position - run_block(Errors{}, b, t).position));
+        worst = std::max(
+            worst, norm_compensate_cam(run_block(seed_like(), b, t).position - run_block(Errors{}, b, t).position));
     std::printf("uncompensated: largest miss %.3g um\n", worst * 1e3);
     EXPECT_GT(worst, 0.01);
 }
@@ -422,7 +423,7 @@ TEST(CliCompensateCam, IsoDirectionsAreBallbarsNegated) {
     iso_program.append(last, src.cend());
     ASSERT_NE(iso_program.find("A-30. C-45."), std::string::npos) << iso_program;
     std::ofstream(d.path / "iso.ngc") << iso_program;
-    std::ofstream(d.path / "model.json") << model_json(seed_like());
+    std::ofstream(d.path / "model.json") << model_json_compensate_cam(seed_like());
     const CliRun r =
         run(d, "compensate --model '" + d.file("model.json") + "' --program '" + d.file("iso.ngc") + "' --offsets '" +
                    d.file("offsets.json") + "' --out '" + d.file("iso_out.ngc") + "' --decimals 7 --iso-directions");

@@ -24,7 +24,7 @@ struct DemoRun {
     std::string out;
 };
 
-DemoRun run(const std::string& args) {
+DemoRun run_demo(const std::string& args) {
     DemoRun r;
     const std::string cmd = std::string(BALLBAR_EXE) + " " + args + " 2>/dev/null";
     FILE* p = ::popen(cmd.c_str(), "r");
@@ -72,7 +72,7 @@ void expect_windows_name_their_samples(const std::filesystem::path& db, int sess
     const auto dir = db.parent_path() / (db.stem().string() + "-csv");
     std::filesystem::remove_all(dir);
     const DemoRun ex =
-        run("--db " + db.string() + " export " + std::to_string(session) + " --format csv --out " + dir.string());
+        run_demo("--db " + db.string() + " export " + std::to_string(session) + " --format csv --out " + dir.string());
     ASSERT_EQ(ex.status, 0);
     std::map<long long, double> displacement_mm;
     for (const auto& s : read_csv(dir / "samples.csv"))
@@ -103,7 +103,7 @@ constexpr double kAngleTol_rad = 2.0 / 3600.0 * 3.141592653589793 / 180.0;
 
 TEST(Demo, JsonGivesMeasuredNextToTrueAndTheSessionId) {
     const auto db = temp_db("json.db");
-    const DemoRun r = run("--db " + db.string() + " demo --json --seed 3 --machine TTTRR");
+    const DemoRun r = run_demo("--db " + db.string() + " demo --json --seed 3 --machine TTTRR");
     ASSERT_EQ(r.status, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j.at("machine"), "TTTRR");
@@ -129,7 +129,7 @@ TEST(Demo, JsonGivesMeasuredNextToTrueAndTheSessionId) {
     }
     EXPECT_EQ(j.at("truth_check").at("wrong_pose"), 0);
     // The session is stored: a second demo gets the next id.
-    const DemoRun again = run("--db " + db.string() + " demo --json --seed 3 --machine TTTRR");
+    const DemoRun again = run_demo("--db " + db.string() + " demo --json --seed 3 --machine TTTRR");
     ASSERT_EQ(again.status, 0);
     EXPECT_EQ(nlohmann::json::parse(again.out).at("session").get<int>(), j.at("session").get<int>() + 1);
 }
@@ -140,7 +140,8 @@ TEST(Demo, FaultsFromTheCommandLineReachTheEmulatorAndTheStoredSession) {
     const auto db = temp_db("faults.db");
     const std::string faults =
         R"({"drop_frame_probability": 0.03, "corrupt_byte_probability": 0.0005, "replay_frame_probability": 0.02, "start_delay_s": 20, "feed_override": 0.5})";
-    const DemoRun r = run("--db " + db.string() + " demo --json --seed 4 --machine RTTTR --faults '" + faults + "'");
+    const DemoRun r =
+        run_demo("--db " + db.string() + " demo --json --seed 4 --machine RTTTR --faults '" + faults + "'");
     ASSERT_EQ(r.status, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
     const auto& tc = j.at("truth_check");
@@ -148,10 +149,10 @@ TEST(Demo, FaultsFromTheCommandLineReachTheEmulatorAndTheStoredSession) {
     EXPECT_GT(tc.at("replayed_frames").get<std::size_t>(), 0u) << tc.dump();
     EXPECT_EQ(tc.at("wrong_pose"), 0);
     const DemoRun rep =
-        run("--db " + db.string() + " report " + std::to_string(j.at("session").get<int>()) + " --json");
+        run_demo("--db " + db.string() + " report " + std::to_string(j.at("session").get<int>()) + " --json");
     EXPECT_EQ(rep.status, 0) << rep.out.substr(0, 400);
     const DemoRun shown =
-        run("--db " + db.string() + " sessions show " + std::to_string(j.at("session").get<int>()) + " --json");
+        run_demo("--db " + db.string() + " sessions show " + std::to_string(j.at("session").get<int>()) + " --json");
     ASSERT_EQ(shown.status, 0) << shown.out.substr(0, 400);
     const auto gaps = nlohmann::json::parse(shown.out).at("sample_gaps");
     EXPECT_GT(gaps.size(), 0u);
@@ -161,7 +162,7 @@ TEST(Demo, FaultsFromTheCommandLineReachTheEmulatorAndTheStoredSession) {
 
 TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {
     const auto db = temp_db("human.db");
-    const DemoRun r = run("--db " + db.string() + " demo");
+    const DemoRun r = run_demo("--db " + db.string() + " demo");
     ASSERT_EQ(r.status, 0) << r.out;
     EXPECT_NE(r.out.find("measured"), std::string::npos);
     EXPECT_NE(r.out.find("true"), std::string::npos);
@@ -171,10 +172,10 @@ TEST(Demo, HumanOutputShowsMeasuredNextToTrue) {
 
 TEST(Demo, SessionsShowGivesEachResultsValuesWithUnits) {
     const auto db = temp_db("show.db");
-    const DemoRun r = run("--db " + db.string() + " demo --json");
+    const DemoRun r = run_demo("--db " + db.string() + " demo --json");
     ASSERT_EQ(r.status, 0) << r.out;
     const auto id = nlohmann::json::parse(r.out)["session"].get<long>();
-    const DemoRun shown = run("--db " + db.string() + " sessions show " + std::to_string(id));
+    const DemoRun shown = run_demo("--db " + db.string() + " sessions show " + std::to_string(id));
     ASSERT_EQ(shown.status, 0) << shown.out;
     // Each SSM location's error with its uncertainty, each test's orientation errors in arc-seconds.
     EXPECT_NE(shown.out.find("test 1 step 1: e ("), std::string::npos) << shown.out;
@@ -186,9 +187,9 @@ TEST(Demo, SessionsShowGivesEachResultsValuesWithUnits) {
 
 TEST(Demo, CompensationFlagsEstimatesMoreThanFiveSigmaFromTheTruth) {
     const auto db = temp_db("flags.db");
-    const DemoRun j = run("--db " + db.string() + " demo --compensate --json");
+    const DemoRun j = run_demo("--db " + db.string() + " demo --compensate --json");
     ASSERT_EQ(j.status, 0) << j.out;
-    const DemoRun t = run("--db " + db.string() + " demo --compensate");
+    const DemoRun t = run_demo("--db " + db.string() + " demo --compensate");
     ASSERT_EQ(t.status, 0) << t.out;
     const auto identified = nlohmann::json::parse(j.out)["compensation"]["identified"];
     ASSERT_GT(identified.size(), 5u);
@@ -216,10 +217,10 @@ TEST(Demo, CompensationFlagsEstimatesMoreThanFiveSigmaFromTheTruth) {
 
 TEST(Demo, StoresTheProcedureStepsAsTheAuditTrail) {
     const auto db = temp_db("audit.db");
-    const DemoRun r = run("--db " + db.string() + " demo --json");
+    const DemoRun r = run_demo("--db " + db.string() + " demo --json");
     ASSERT_EQ(r.status, 0) << r.out;
     const auto id = nlohmann::json::parse(r.out)["session"].get<long>();
-    const DemoRun e = run("--db " + db.string() + " export " + std::to_string(id) + " --format json --out -");
+    const DemoRun e = run_demo("--db " + db.string() + " export " + std::to_string(id) + " --format json --out -");
     ASSERT_EQ(e.status, 0) << e.out;
     const auto j = nlohmann::json::parse(e.out);
     // Every step of the guided procedure, in order, from connecting to the operator's acceptance ...
@@ -234,7 +235,7 @@ TEST(Demo, StoresTheProcedureStepsAsTheAuditTrail) {
 }
 
 TEST(Demo, RejectsAnUnknownMachineType) {
-    const DemoRun r = run("demo --machine XYZAB");
+    const DemoRun r = run_demo("demo --machine XYZAB");
     EXPECT_EQ(r.status, 2);
 }
 

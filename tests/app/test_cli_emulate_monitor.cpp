@@ -75,7 +75,7 @@ struct Run {
     std::string out;
 };
 
-Run run(const std::string& cmd) {
+Run run_emulate_monitor(const std::string& cmd) {
     std::string out;
     FILE* f = ::popen(cmd.c_str(), "r");
     std::array<char, 4096> buf{};
@@ -91,7 +91,8 @@ TEST(CliEmulateMonitor, PtyTwoSecondsGiveAbout2000SamplesAndNoLoss) {
     Child emu({BALLBAR_EXE, "emulate", "--pty", "--seed", "7"});
     const std::string path = emu.line(5000);
     ASSERT_EQ(path.rfind("/dev/pts/", 0), 0u) << "emulate printed '" << path << "'";
-    const auto r = run(std::string(BALLBAR_EXE) + " monitor --device serial:" + path + " --seconds 2 --json");
+    const auto r =
+        run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device serial:" + path + " --seconds 2 --json");
     ASSERT_EQ(r.code, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_NEAR(j.at("samples").get<double>(), 2000.0, 150.0) << r.out;
@@ -100,7 +101,8 @@ TEST(CliEmulateMonitor, PtyTwoSecondsGiveAbout2000SamplesAndNoLoss) {
     EXPECT_NEAR(j.at("mean_mm").get<double>(), 150.0237, 0.001);  // unreferenced zero error 23.7 µm
     EXPECT_NEAR(j.at("sd_mm").get<double>(), 0.25e-3, 0.05e-3);
     // A second session on the same pty works too (the emulator outlives its hosts).
-    const auto r2 = run(std::string(BALLBAR_EXE) + " monitor --device serial:" + path + " --seconds 0.5 --json");
+    const auto r2 =
+        run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device serial:" + path + " --seconds 0.5 --json");
     ASSERT_EQ(r2.code, 0) << r2.out;
     EXPECT_EQ(nlohmann::json::parse(r2.out).at("lost_frames").get<int>(), 0);
 }
@@ -109,7 +111,7 @@ TEST(CliEmulateMonitor, TcpLoopback) {
     Child emu({BALLBAR_EXE, "emulate", "--tcp", "0"});
     const std::string uri = emu.line(5000);
     ASSERT_EQ(uri.rfind("tcp:127.0.0.1:", 0), 0u) << uri;
-    const auto r = run(std::string(BALLBAR_EXE) + " monitor --device " + uri + " --seconds 0.5 --json");
+    const auto r = run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device " + uri + " --seconds 0.5 --json");
     ASSERT_EQ(r.code, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_NEAR(j.at("samples").get<double>(), 500.0, 100.0);
@@ -117,10 +119,13 @@ TEST(CliEmulateMonitor, TcpLoopback) {
 }
 
 TEST(CliEmulateMonitor, UsageAndDeviceErrors) {
-    EXPECT_EQ(run(std::string(BALLBAR_EXE) + " monitor --device nonsense 2>&1").code, 2);
-    EXPECT_EQ(run(std::string(BALLBAR_EXE) + " monitor --device serial:/dev/nonexistent-bb --seconds 1 2>&1").code, 1);
-    EXPECT_EQ(run(std::string(BALLBAR_EXE) + " emulate 2>&1").code, 2);
-    const auto r = run(std::string(BALLBAR_EXE) + " monitor --device emulator: --seconds 0.3 --json");
+    EXPECT_EQ(run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device nonsense 2>&1").code, 2);
+    EXPECT_EQ(
+        run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device serial:/dev/nonexistent-bb --seconds 1 2>&1")
+            .code,
+        1);
+    EXPECT_EQ(run_emulate_monitor(std::string(BALLBAR_EXE) + " emulate 2>&1").code, 2);
+    const auto r = run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device emulator: --seconds 0.3 --json");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_GT(nlohmann::json::parse(r.out).at("samples").get<int>(), 200);
 }
@@ -135,11 +140,13 @@ TEST(CliEmulateMonitor, AnInstrumentThatNeverStreamsIsAFailureNotZeroSamples) {
     ASSERT_NE(f, nullptr);
     std::fputs("{\"faults\": {\"drop_frame_probability\": 1}}", f);
     std::fclose(f);
-    const auto text = run(std::string(BALLBAR_EXE) + " monitor --device emulator:" + cfg + " --seconds 0.5 2>&1");
+    const auto text =
+        run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device emulator:" + cfg + " --seconds 0.5 2>&1");
     EXPECT_EQ(text.code, 1) << text.out;
     EXPECT_NE(text.out.find("sent no samples"), std::string::npos) << text.out;
     EXPECT_EQ(text.out.find("std 0"), std::string::npos) << text.out;
-    const auto json = run(std::string(BALLBAR_EXE) + " monitor --device emulator:" + cfg + " --seconds 0.5 --json");
+    const auto json =
+        run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device emulator:" + cfg + " --seconds 0.5 --json");
     EXPECT_EQ(json.code, 1) << json.out;
     const auto j = nlohmann::json::parse(json.out, nullptr, false);
     ASSERT_FALSE(j.is_discarded()) << json.out;
@@ -165,7 +172,8 @@ TEST(CliEmulateMonitor, TheLinkIsMadeNewAndNeverOverSomethingElse) {
         const ssize_t n = ::readlink(link.c_str(), target.data(), target.size() - 1);
         ASSERT_GT(n, 0);
         EXPECT_EQ(std::string(target.data(), static_cast<std::size_t>(n)), path);
-        const auto r = run(std::string(BALLBAR_EXE) + " monitor --device serial:" + link + " --seconds 0.3 --json");
+        const auto r = run_emulate_monitor(std::string(BALLBAR_EXE) + " monitor --device serial:" + link +
+                                           " --seconds 0.3 --json");
         EXPECT_EQ(r.code, 0) << r.out;
     }  // SIGTERM: the emulator stops and takes its link with it
     EXPECT_NE(::access(link.c_str(), F_OK), 0);
@@ -179,7 +187,7 @@ TEST(CliEmulateMonitor, TheLinkIsMadeNewAndNeverOverSomethingElse) {
         std::fputs("not the emulator's\n", f);
         std::fclose(f);
     }
-    const auto refused = run(std::string(BALLBAR_EXE) + " emulate --pty --link " + link + " 2>&1");
+    const auto refused = run_emulate_monitor(std::string(BALLBAR_EXE) + " emulate --pty --link " + link + " 2>&1");
     EXPECT_EQ(refused.code, 2) << refused.out;
     EXPECT_NE(refused.out.find(link), std::string::npos) << refused.out;
     {
@@ -193,7 +201,7 @@ TEST(CliEmulateMonitor, TheLinkIsMadeNewAndNeverOverSomethingElse) {
     // Someone's dangling link: refused too.
     ::unlink(link.c_str());
     ASSERT_EQ(::symlink("/dev/pts/someone-elses", link.c_str()), 0);
-    EXPECT_EQ(run(std::string(BALLBAR_EXE) + " emulate --pty --link " + link + " 2>&1").code, 2);
+    EXPECT_EQ(run_emulate_monitor(std::string(BALLBAR_EXE) + " emulate --pty --link " + link + " 2>&1").code, 2);
     std::array<char, 256> target{};
     const ssize_t n = ::readlink(link.c_str(), target.data(), target.size() - 1);
     ASSERT_GT(n, 0);

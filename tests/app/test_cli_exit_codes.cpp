@@ -18,7 +18,7 @@ namespace ballbar::test {
 namespace {
 
 namespace fs = std::filesystem;
-const fs::path kData = fs::path(BALLBAR_TEST_DATA_DIR);
+const fs::path kDataExitCodes = fs::path(BALLBAR_TEST_DATA_DIR);
 
 /// One row of the table: the command line (after `--db DIR/test.db`), the code it must exit with, a
 /// piece of its message, and the files (in the scratch directory) it must not leave behind.
@@ -29,8 +29,8 @@ struct Case {
     std::vector<std::string> no_files = {};
 };
 
-std::string data(const std::string& rel) {
-    return "'" + (kData / rel).string() + "'";
+std::string data_exit_codes(const std::string& rel) {
+    return "'" + (kDataExitCodes / rel).string() + "'";
 }
 
 /// The scratch directory's inputs: a machine file, a malformed one, an NC program.
@@ -59,8 +59,8 @@ void expect_case(const TempDir& d, const Case& c) {
 TEST(CliExitCodes, EveryRefusedCommandLineExits2AndCreatesNoDatabase) {
     TempDir d;
     write_inputs(d);
-    const std::string machine = data("machines/tttrr.json");
-    const std::string quick = data("machines/tttrr-quick.plan.json");
+    const std::string machine = data_exit_codes("machines/tttrr.json");
+    const std::string quick = data_exit_codes("machines/tttrr-quick.plan.json");
     const std::vector<Case> cases = {
         // The command line itself.
         {"mesure", 2, "did you mean 'measure'?"},
@@ -98,12 +98,12 @@ TEST(CliExitCodes, EveryRefusedCommandLineExits2AndCreatesNoDatabase) {
         {"export 1 --format bogus --out x.json", 2, "bogus", {"x.json"}},
         {"identify nonexist.readings", 2, "no such file: nonexist.readings"},
         {"identify 1", 2, "no database at"},
-        {"identify --params bogus " + data("readings/rrttt_minimal.csv"), 2, "unknown parameter 'bogus'"},
+        {"identify --params bogus " + data_exit_codes("readings/rrttt_minimal.csv"), 2, "unknown parameter 'bogus'"},
         {"discover nonexist.readings", 2, "no such file: nonexist.readings"},
         {"discover 1", 2, "no database at"},
         // Valid readings, too few for the unknowns: the same failure, the same code, in both.
-        {"identify " + data("readings/rrttt_minimal.csv"), 1, "more readings than unknowns"},
-        {"discover " + data("readings/rrttt_minimal.csv"), 1, "more readings than unknowns"},
+        {"identify " + data_exit_codes("readings/rrttt_minimal.csv"), 1, "more readings than unknowns"},
+        {"discover " + data_exit_codes("readings/rrttt_minimal.csv"), 1, "more readings than unknowns"},
         {"compensate --model 1 --program " + d.file("prog.nc") + " --out o.nc", 2, "no database at", {"o.nc"}},
         {"compensate --model missing-model --program " + d.file("prog.nc") + " --out o.nc",
          2,
@@ -112,7 +112,7 @@ TEST(CliExitCodes, EveryRefusedCommandLineExits2AndCreatesNoDatabase) {
         {"compensate --model 1 --program " + d.file("prog.nc"), 2, "--out", {"o.nc"}},
         // Inputs.
         {"import nonexist.readings", 2, "nonexist.readings"},
-        {"import " + data("readings/invalid/bad_magic.csv"), 2, "nothing imported"},
+        {"import " + data_exit_codes("readings/invalid/bad_magic.csv"), 2, "nothing imported"},
         {"solve ssm --input missing-request.json", 2, "no such request file: missing-request.json"},
         // Instruments.
         {"monitor --device bogus:x --seconds 1", 2, "bad device URI"},
@@ -129,9 +129,9 @@ TEST(CliExitCodes, EveryRefusedCommandLineExits2AndCreatesNoDatabase) {
 TEST(CliExitCodes, NotFoundIs2EverywhereAndLeavesTheDatabaseAsItWas) {
     TempDir d;
     write_inputs(d);
-    const std::string readings = data("readings/rrttt_minimal.csv");
+    const std::string readings = data_exit_codes("readings/rrttt_minimal.csv");
     ASSERT_EQ(run(d, "import " + readings).code, 0);
-    const std::string machine = data("machines/tttrr.json");
+    const std::string machine = data_exit_codes("machines/tttrr.json");
     const std::vector<Case> cases = {
         {"sessions show 99", 2, "no session"},
         {"report 99 --json", 2, "no session"},

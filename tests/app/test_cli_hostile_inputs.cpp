@@ -29,7 +29,7 @@ namespace {
 
 using ballbar::test::kSanitized;  // ASan reserves terabytes of address space: no ulimit -v then
 
-const std::string kData = BALLBAR_TEST_DATA_DIR;
+const std::string kDataHostileInputs = BALLBAR_TEST_DATA_DIR;
 
 std::string q(const std::string& s) {
     return "'" + s + "'";
@@ -68,8 +68,8 @@ const std::string kProgram = "%\nG90\nG1 X50 Y0 Z30 A30 C0 F1000\nG1 X0 Y50 A30 
 
 /// A scratch directory with good inputs and the four hostile ones.
 struct Hostile : TempDir {
-    std::string machine = kData + "/machines/tttrr.json";
-    std::string readings = kData + "/readings/spec_example.csv";
+    std::string machine = kDataHostileInputs + "/machines/tttrr.json";
+    std::string readings = kDataHostileInputs + "/readings/spec_example.csv";
     Hostile() {
         std::ofstream(path / "model.json") << model_json();
         std::ofstream(path / "in.nc") << kProgram;
@@ -159,12 +159,12 @@ TEST(CliHostileStdin, SolveReadsAtMost16MiBOfStandardInput) {
 struct Outputs : TempDir {
     const std::string victim = file("victim");
     Outputs() {
-        const CliRun r = run(*this, "import " + q(kData + "/readings/spec_example.csv"));
+        const CliRun r = run(*this, "import " + q(kDataHostileInputs + "/readings/spec_example.csv"));
         if (r.code != 0) throw std::runtime_error("import failed: " + r.err);
         std::ofstream(victim) << "victim\n";
         std::ofstream(path / "model.json") << model_json();
         std::ofstream(path / "in.nc") << kProgram;
-        std::ofstream(path / "machine.json") << slurp(kData + "/machines/tttrr.json");
+        std::ofstream(path / "machine.json") << slurp(kDataHostileInputs + "/machines/tttrr.json");
     }
     std::string db() const { return file("test.db"); }
     /// Plants OUT.tmp and OUT.part symlinks to the victim.
@@ -310,7 +310,7 @@ TEST(CliHostileMessages, LongTokensAreCutAndAnExponentIsAMalformedNumber) {
     TempDir d;
     std::ofstream(d.path / "model.json") << model_json();
     // A 1 MB malformed number in a readings file: the message holds 40 bytes of it and "…".
-    std::string text = slurp(kData + "/readings/spec_example.csv");
+    std::string text = slurp(kDataHostileInputs + "/readings/spec_example.csv");
     const auto last = text.rfind("100.0021");
     ASSERT_NE(last, std::string::npos);
     text.replace(last, 8, std::string(1'000'000, '7') + "x");

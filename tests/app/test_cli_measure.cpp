@@ -25,7 +25,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-const fs::path kData = fs::path(BALLBAR_TEST_DATA_DIR) / "machines";
+const fs::path kDataMeasure = fs::path(BALLBAR_TEST_DATA_DIR) / "machines";
 
 fs::path temp_dir() {
     const auto dir = fs::temp_directory_path() / ("ballbar-measure-test-" + std::to_string(::getpid()));
@@ -40,7 +40,7 @@ std::string slurp(const fs::path& p) {
     return ss.str();
 }
 
-int run(const std::string& args, std::string* out = nullptr) {
+int run_measure(const std::string& args, std::string* out = nullptr) {
     const std::string cmd = std::string(BALLBAR_EXE) + " " + args + " 2>&1";
     FILE* p = ::popen(cmd.c_str(), "r");
     std::array<char, 4096> buf{};
@@ -57,7 +57,7 @@ int run(const std::string& args, std::string* out = nullptr) {
 /// a test needs the wall clock (to stop a process half-way): a session then takes the CPU's time, not
 /// the machine's 19 s, and what these tests check (prompts, answers, exit codes) is the same.
 fs::path emulator_config(const fs::path& dir, const fs::path& program, bool simulated = true) {
-    std::string cfg = slurp(kData / "tttrr-emulator.json");
+    std::string cfg = slurp(kDataMeasure / "tttrr-emulator.json");
     cfg.replace(cfg.find("PROGRAM"), 7, program.string());
     if (simulated) cfg.replace(cfg.find('{'), 1, "{\"time\": \"simulated\",");
     const fs::path path = dir / ("emulator-" + program.stem().string() + ".json");
@@ -67,18 +67,18 @@ fs::path emulator_config(const fs::path& dir, const fs::path& program, bool simu
 
 TEST(CliMeasure, DryRunChecksThePlanAndWritesTheProgram) {
     std::string out;
-    ASSERT_EQ(run("measure --dry-run --machine " + (kData / "rrttt.json").string(), &out), 0) << out;
+    ASSERT_EQ(run_measure("measure --dry-run --machine " + (kDataMeasure / "rrttt.json").string(), &out), 0) << out;
     EXPECT_NE(out.find("G90"), std::string::npos);
     EXPECT_NE(out.find("G4 P"), std::string::npos);
     EXPECT_NE(out.find(" B"), std::string::npos);  // RRTTT turns A and B
     const fs::path bad = temp_dir() / "narrow.json";
-    std::string m = slurp(kData / "tttrr.json");
+    std::string m = slurp(kDataMeasure / "tttrr.json");
     m.replace(m.find("\"A_deg\": [-30, 120]"), 19, "\"A_deg\": [-5, 5]");
     std::ofstream(bad) << m;
-    EXPECT_EQ(
-        run("measure --dry-run --machine " + bad.string() + " --plan " + (kData / "tttrr-table2.plan.json").string(),
-            &out),
-        2);
+    EXPECT_EQ(run_measure("measure --dry-run --machine " + bad.string() + " --plan " +
+                              (kDataMeasure / "tttrr-table2.plan.json").string(),
+                          &out),
+              2);
     EXPECT_NE(out.find("A = 15"), std::string::npos) << out;
     EXPECT_NE(out.find("travel"), std::string::npos) << out;
 }
@@ -91,8 +91,8 @@ TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
     const fs::path db = dir / "interactive.db";
     fs::remove(db);
     const std::string exe = BALLBAR_EXE;
-    const std::string machine = (kData / "tttrr.json").string();
-    const std::string plan = (kData / "tttrr-quick.plan.json").string();
+    const std::string machine = (kDataMeasure / "tttrr.json").string();
+    const std::string plan = (kDataMeasure / "tttrr-quick.plan.json").string();
     const std::string device = "emulator:" + cfg.string();
 
     int master = -1;
@@ -173,7 +173,7 @@ int run_two_processes(const fs::path& db, const fs::path& plan, std::string& out
     fs::remove(db);
     fs::remove("/tmp/ballbar-session.nc");
     const std::string exe = BALLBAR_EXE;
-    const std::string cfg = (kData / "tttrr-emulator-measure.json").string();
+    const std::string cfg = (kDataMeasure / "tttrr-emulator-measure.json").string();
     int outfd[2];
     if (::pipe(outfd) != 0) return -1;
     const pid_t emu = ::fork();
@@ -194,10 +194,10 @@ int run_two_processes(const fs::path& db, const fs::path& plan, std::string& out
     while (::read(outfd[0], &c, 1) == 1 && c != '\n') line += c;
     int code = -1;
     if (line.rfind("/dev/pts/", 0) == 0)
-        code =
-            run("--db " + db.string() + " measure --non-interactive --device serial:" + line + " --machine " +
-                    (kData / "tttrr.json").string() + " --plan " + plan.string() + " --program /tmp/ballbar-session.nc",
-                &out);
+        code = run_measure("--db " + db.string() + " measure --non-interactive --device serial:" + line +
+                               " --machine " + (kDataMeasure / "tttrr.json").string() + " --plan " + plan.string() +
+                               " --program /tmp/ballbar-session.nc",
+                           &out);
     else
         out = "the emulator printed no pty: " + line;
     ::kill(emu, SIGINT);
@@ -209,7 +209,7 @@ int run_two_processes(const fs::path& db, const fs::path& plan, std::string& out
 
 TEST(CliMeasure, TheDocumentedTwoProcessCommandsCompleteASession) {
     std::string out;
-    const int code = run_two_processes(temp_dir() / "two-process.db", kData / "tttrr-quick.plan.json", out);
+    const int code = run_two_processes(temp_dir() / "two-process.db", kDataMeasure / "tttrr-quick.plan.json", out);
     EXPECT_EQ(code, 0) << out;
     EXPECT_NE(out.find("Program stop (M0): mount the bar"), std::string::npos) << out;
     EXPECT_NE(out.find("completed"), std::string::npos) << out;
@@ -223,12 +223,12 @@ TEST(CliMeasure, TheDocumentedTwoProcessCommandsCompleteASession) {
 TEST(CliMeasure, ATwoSocketPlanCompletesThroughTheEmulatorOnAPty) {
     const fs::path db = temp_dir() / "two-sockets.db";
     std::string out;
-    const int code = run_two_processes(db, kData / "tttrr-two-sockets.plan.json", out, /*fast=*/true);
+    const int code = run_two_processes(db, kDataMeasure / "tttrr-two-sockets.plan.json", out, /*fast=*/true);
     EXPECT_EQ(code, 0) << out;
     EXPECT_NE(out.find("move the socket to [-29.275, -24.312, -77.777]"), std::string::npos) << out;
     EXPECT_NE(out.find("completed"), std::string::npos) << out;
     std::string shown;
-    ASSERT_EQ(run("--db " + db.string() + " sessions show 1 --json", &shown), 0) << shown;
+    ASSERT_EQ(run_measure("--db " + db.string() + " sessions show 1 --json", &shown), 0) << shown;
     const auto j = nlohmann::json::parse(shown);
     EXPECT_EQ(j.at("session").at("state"), "completed") << shown;
     EXPECT_EQ(j.at("session").at("point_count"), 12) << "two tests, two steps, three points each";
@@ -237,10 +237,10 @@ TEST(CliMeasure, ATwoSocketPlanCompletesThroughTheEmulatorOnAPty) {
 TEST(CliMeasure, ADefaultPlanWithTheEmulatorsDefaultBarIsRefusedBeforeAnyQuestion) {
     const fs::path dir = temp_dir();
     std::string out;
-    const int code =
-        run("--db " + (dir / "mismatch.db").string() + " measure --non-interactive --device emulator: --machine " +
-                (kData / "tttrr.json").string(),
-            &out);
+    const int code = run_measure("--db " + (dir / "mismatch.db").string() +
+                                     " measure --non-interactive --device emulator: --machine " +
+                                     (kDataMeasure / "tttrr.json").string(),
+                                 &out);
     EXPECT_EQ(code, 1) << out;
     EXPECT_NE(out.find("\"bar_length_mm\": 150 in a plan file"), std::string::npos) << "names the fix: " << out;
     EXPECT_EQ(out.find("calibrator"), std::string::npos) << "nothing asked first: " << out;
@@ -253,10 +253,11 @@ TEST(CliMeasure, JsonGivesTheOperatorsEventsAsJsonLines) {
     const fs::path db = dir / "json.db";
     fs::remove(db);
     std::string out;
-    const int code = run("--db " + db.string() + " measure --json --non-interactive --device emulator:" + cfg.string() +
-                             " --machine " + (kData / "tttrr.json").string() + " --plan " +
-                             (kData / "tttrr-quick.plan.json").string() + " --program " + (dir / "j.nc").string(),
-                         &out);
+    const int code =
+        run_measure("--db " + db.string() + " measure --json --non-interactive --device emulator:" + cfg.string() +
+                        " --machine " + (kDataMeasure / "tttrr.json").string() + " --plan " +
+                        (kDataMeasure / "tttrr-quick.plan.json").string() + " --program " + (dir / "j.nc").string(),
+                    &out);
     EXPECT_EQ(code, 0) << out;
     int points = 0, stops = 0, programs = 0, done = 0;
     std::istringstream lines(out);
@@ -286,10 +287,11 @@ TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
     const fs::path db = dir / "batch.db";
     fs::remove(db);
     std::string out;
-    const int code = run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
-                             " --machine " + (kData / "tttrr.json").string() + " --plan " +
-                             (kData / "tttrr-quick.plan.json").string() + " --program " + (dir / "b.nc").string(),
-                         &out);
+    const int code =
+        run_measure("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
+                        " --machine " + (kDataMeasure / "tttrr.json").string() + " --plan " +
+                        (kDataMeasure / "tttrr-quick.plan.json").string() + " --program " + (dir / "b.nc").string(),
+                    &out);
     EXPECT_EQ(code, 0) << out;
     EXPECT_NE(out.find("[plan: yes]"), std::string::npos) << out;
     EXPECT_NE(out.find("captured 5/6"), std::string::npos) << out;
@@ -300,9 +302,9 @@ TEST(CliMeasure, NonInteractiveTakesThePlansAnswers) {
     std::smatch m;
     ASSERT_TRUE(std::regex_search(out, m, id_re)) << out;
     std::string refused;
-    EXPECT_EQ(run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
-                      " --resume " + m[1].str(),
-                  &refused),
+    EXPECT_EQ(run_measure("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
+                              " --resume " + m[1].str(),
+                          &refused),
               2)
         << refused;
 }
@@ -313,7 +315,7 @@ TEST(CliMeasure, AQualityAbortInCiIsAFailureExit1NotAnInterruption) {
     const fs::path dir = temp_dir();
     fs::remove(dir / "q.nc");
     const fs::path cfg = emulator_config(dir, dir / "q.nc");
-    std::string plan = slurp(kData / "tttrr-quick.plan.json");
+    std::string plan = slurp(kDataMeasure / "tttrr-quick.plan.json");
     const std::string loose = "\"max_std_um\": 2";
     ASSERT_NE(plan.find(loose), std::string::npos);
     plan.replace(plan.find(loose), loose.size(), "\"max_std_um\": 0.05, \"retries\": 0");
@@ -322,15 +324,16 @@ TEST(CliMeasure, AQualityAbortInCiIsAFailureExit1NotAnInterruption) {
     const fs::path db = dir / "quality.db";
     fs::remove(db);
     std::string out;
-    const int code = run("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
-                             " --machine " + (kData / "tttrr.json").string() + " --plan " + plan_file.string() +
-                             " --program " + (dir / "q.nc").string(),
-                         &out);
+    const int code =
+        run_measure("--db " + db.string() + " measure --non-interactive --device emulator:" + cfg.string() +
+                        " --machine " + (kDataMeasure / "tttrr.json").string() + " --plan " + plan_file.string() +
+                        " --program " + (dir / "q.nc").string(),
+                    &out);
     EXPECT_EQ(code, 1) << "3 is only an interruption:\n" << out;
     EXPECT_NE(out.find("ballbar: error: session 1 aborted: "), std::string::npos) << out;
     EXPECT_NE(out.find("failed"), std::string::npos) << out;
     std::string shown;
-    ASSERT_EQ(run("--db " + db.string() + " sessions show 1 --json", &shown), 0) << shown;
+    ASSERT_EQ(run_measure("--db " + db.string() + " sessions show 1 --json", &shown), 0) << shown;
     EXPECT_EQ(nlohmann::json::parse(shown).at("session").at("state"), "aborted") << shown;
 }
 
@@ -345,8 +348,8 @@ struct StoppedMeasure {
 
 StoppedMeasure measure_then_signal(const fs::path& dir, const fs::path& db, int sig) {
     const std::string exe = BALLBAR_EXE;
-    const std::string machine = (kData / "tttrr.json").string();
-    const std::string plan = (kData / "tttrr-quick.plan.json").string();
+    const std::string machine = (kDataMeasure / "tttrr.json").string();
+    const std::string plan = (kDataMeasure / "tttrr-quick.plan.json").string();
     const std::string prog = (dir / "k.nc").string();
     fs::remove(prog);
     const std::string device = "emulator:" + emulator_config(dir, prog, /*simulated=*/false).string();
@@ -387,9 +390,9 @@ void expect_resumes_after_three_points(const fs::path& dir, const fs::path& db, 
     fs::remove(dir / "k2.nc");
     const std::string resumed_device = "emulator:" + emulator_config(dir, dir / "k2.nc").string();
     std::string out2;
-    const int code = run("--db " + db.string() + " measure --non-interactive --device " + resumed_device +
-                             " --resume " + session + " --program " + (dir / "k2.nc").string(),
-                         &out2);
+    const int code = run_measure("--db " + db.string() + " measure --non-interactive --device " + resumed_device +
+                                     " --resume " + session + " --program " + (dir / "k2.nc").string(),
+                                 &out2);
     EXPECT_EQ(code, 0) << out2;
     EXPECT_NE(out2.find("resumed after 3 points"), std::string::npos) << out2;
     EXPECT_NE(out2.find("Retry program (3 points)"), std::string::npos) << out2;
@@ -420,7 +423,7 @@ TEST(CliMeasure, CtrlCStoresStopsWithExit3AndResumes) {
     ASSERT_FALSE(s.session.empty()) << s.out;
     // Stored as interrupted by the operator, not failed or aborted: resumable.
     std::string shown;
-    ASSERT_EQ(run("--db " + db.string() + " sessions show " + s.session + " --json", &shown), 0) << shown;
+    ASSERT_EQ(run_measure("--db " + db.string() + " sessions show " + s.session + " --json", &shown), 0) << shown;
     EXPECT_NE(shown.find("\"state\": \"interrupted\""), std::string::npos) << shown;
     EXPECT_NE(shown.find("interrupted: interrupted by the operator"), std::string::npos) << shown;
     expect_resumes_after_three_points(dir, db, s.session);
@@ -436,7 +439,7 @@ TEST(CliMeasure, AResumeRightAfterAKillTakesOverTheStreamingInstrument) {
     const fs::path db = dir / "takeover.db", prog = dir / "t.nc";
     fs::remove(db);
     fs::remove(prog);
-    std::string cfg = slurp(kData / "tttrr-emulator-measure.json");
+    std::string cfg = slurp(kDataMeasure / "tttrr-emulator-measure.json");
     cfg.replace(cfg.find("/tmp/ballbar-session.nc"), 23, prog.string());
     const fs::path cfg_path = dir / "emulator.json";
     std::ofstream(cfg_path) << cfg;
@@ -460,7 +463,8 @@ TEST(CliMeasure, AResumeRightAfterAKillTakesOverTheStreamingInstrument) {
     // 1. measure, killed while the instrument streams (after three points).
     int out[2];
     ASSERT_EQ(::pipe(out), 0);
-    const std::string machine = (kData / "tttrr.json").string(), plan = (kData / "tttrr-quick.plan.json").string();
+    const std::string machine = (kDataMeasure / "tttrr.json").string(),
+                      plan = (kDataMeasure / "tttrr-quick.plan.json").string();
     const pid_t pid = ::fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {
@@ -488,9 +492,9 @@ TEST(CliMeasure, AResumeRightAfterAKillTakesOverTheStreamingInstrument) {
 
     // 2. at once, on the same (still streaming) instrument.
     std::string second;
-    const int code = run("--db " + db.string() + " measure --non-interactive --device " + device +
-                             " --resume 1 --program " + prog.string(),
-                         &second);
+    const int code = run_measure("--db " + db.string() + " measure --non-interactive --device " + device +
+                                     " --resume 1 --program " + prog.string(),
+                                 &second);
     ::kill(emu, SIGINT);
     ::waitpid(emu, &st, 0);
     ::close(emu_out[0]);

@@ -27,7 +27,7 @@ using ballbar::test::CliRun;
 using ballbar::test::run;
 using ballbar::test::slurp;
 using ballbar::test::TempDir;
-const fs::path kData = fs::path(BALLBAR_TEST_DATA_DIR) / "machines";
+const fs::path kDataSessions = fs::path(BALLBAR_TEST_DATA_DIR) / "machines";
 
 /// A loopback TCP port that takes connections (the kernel's backlog) and never answers: an instrument
 /// that does not speak.
@@ -49,12 +49,12 @@ struct SilentPort {
 };
 
 /// The emulator with the plan's NC program from power-on, and the bar's length.
-fs::path emulator_config(const TempDir& dir, double bar_mm) {
+fs::path emulator_config_sessions(const TempDir& dir, double bar_mm) {
     const std::string prog = dir.file("plan.nc");
-    const CliRun dry = run(dir, "measure --dry-run --machine " + (kData / "tttrr.json").string() + " --plan " +
-                                    (kData / "tttrr-quick.plan.json").string() + " --program " + prog);
+    const CliRun dry = run(dir, "measure --dry-run --machine " + (kDataSessions / "tttrr.json").string() + " --plan " +
+                                    (kDataSessions / "tttrr-quick.plan.json").string() + " --program " + prog);
     EXPECT_EQ(dry.code, 0) << dry.out << dry.err;
-    std::string cfg = slurp(kData / "tttrr-emulator.json");
+    std::string cfg = slurp(kDataSessions / "tttrr-emulator.json");
     cfg.replace(cfg.find("PROGRAM"), 7, prog);
     const std::string len = "\"calibrated_length_mm\": 100";
     cfg.replace(cfg.find(len), len.size(), "\"calibrated_length_mm\": " + std::to_string(bar_mm));
@@ -64,8 +64,8 @@ fs::path emulator_config(const TempDir& dir, double bar_mm) {
 }
 
 std::string measure_args(const std::string& device, const TempDir& dir) {
-    return "measure --non-interactive --device " + device + " --machine " + (kData / "tttrr.json").string() +
-           " --plan " + (kData / "tttrr-quick.plan.json").string() + " --program " + dir.file("m.nc");
+    return "measure --non-interactive --device " + device + " --machine " + (kDataSessions / "tttrr.json").string() +
+           " --plan " + (kDataSessions / "tttrr-quick.plan.json").string() + " --program " + dir.file("m.nc");
 }
 
 nlohmann::json show_json(const TempDir& dir, const std::string& id) {
@@ -118,7 +118,7 @@ TEST(CliSessions, KilledIsInterruptedAFailedOpenKeepsItSoAndItResumes) {
     EXPECT_NE(shown.out.find("resume      ballbar measure --resume 1"), std::string::npos) << shown.out;
 
     // 3. it resumes on a working instrument and completes; the reason comes first.
-    const fs::path cfg = emulator_config(dir, 100);
+    const fs::path cfg = emulator_config_sessions(dir, 100);
     r = run(dir, "measure --non-interactive --resume 1 --device emulator:" + cfg.string() + " --program " +
                      dir.file("r2.nc"));
     EXPECT_EQ(r.code, 0) << r.out << r.err;
@@ -143,7 +143,7 @@ TEST(CliSessions, KilledIsInterruptedAFailedOpenKeepsItSoAndItResumes) {
 
 TEST(CliSessions, BarLengthMismatchStopsBeforeAnyQuestionAndNamesTheFix) {
     TempDir dir;
-    const fs::path cfg = emulator_config(dir, 150);
+    const fs::path cfg = emulator_config_sessions(dir, 150);
     const CliRun r = run(dir, measure_args("emulator:" + cfg.string(), dir));
     EXPECT_EQ(r.code, 1) << r.out << r.err;
     const std::string all = r.out + r.err;

@@ -23,7 +23,7 @@ struct Proc {
     std::string out, err;
 };
 
-std::string slurp(const fs::path& p) {
+std::string slurp_solve(const fs::path& p) {
     std::ifstream in(p);
     std::stringstream ss;
     ss << in.rdbuf();
@@ -31,7 +31,7 @@ std::string slurp(const fs::path& p) {
 }
 
 /// Runs `ballbar <args>` with `input` on stdin; captures stdout, stderr and the exit code.
-Proc run(const std::string& args, const std::string& input = "") {
+Proc run_solve(const std::string& args, const std::string& input = "") {
     char tmpl[] = "/tmp/ballbar-cli-solve-XXXXXX";
     const char* dir = ::mkdtemp(tmpl);
     EXPECT_NE(dir, nullptr);
@@ -42,14 +42,14 @@ Proc run(const std::string& args, const std::string& input = "") {
     const int status = std::system(cmd.c_str());
     Proc r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(d / "out");
-    r.err = slurp(d / "err");
+    r.out = slurp_solve(d / "out");
+    r.err = slurp_solve(d / "err");
     fs::remove_all(d);
     return r;
 }
 
 /// The JSON error on stderr of a refused request: exit code 2 and the named field.
-void expect_field_error(const Proc& r, const std::string& field) {
+void expect_field_error_solve(const Proc& r, const std::string& field) {
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_TRUE(r.out.empty()) << r.out;
     json e;
@@ -60,7 +60,7 @@ void expect_field_error(const Proc& r, const std::string& field) {
 
 using V3 = std::array<double, 3>;
 
-double norm(const V3& v) {
+double norm_solve(const V3& v) {
     return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
 }
 
@@ -75,7 +75,7 @@ json cube_corner(const V3& s, double length, json& deltas, const V3& e) {
                    s[2] + length * std::cos(th)};
         pts.push_back(p);
         const V3 d{p[0] - s[0], p[1] - s[1], p[2] - s[2]};
-        deltas.push_back(norm({d[0] + e[0], d[1] + e[1], d[2] + e[2]}) - norm(d));
+        deltas.push_back(norm_solve({d[0] + e[0], d[1] + e[1], d[2] + e[2]}) - norm_solve(d));
     }
     return pts;
 }
@@ -100,7 +100,7 @@ void expect_rel(double got, double want, double rel = 1e-10) {
 
 TEST(CliSolve, SsmFromStdinRecoversTheError) {
     const V3 e{0.1, -0.2, 0.3};
-    const Proc r = run("solve ssm", ssm_request(e).dump());
+    const Proc r = run_solve("solve ssm", ssm_request(e).dump());
     ASSERT_EQ(r.code, 0) << r.err;
     const json out = json::parse(r.out);
     for (int i = 0; i < 3; ++i) {
@@ -121,7 +121,7 @@ TEST(CliSolve, SsmFromInputFileWithSixPoints) {
         const double az = M_PI / 3.0 * k;
         const V3 d{150 * std::sin(th) * std::cos(az), 150 * std::sin(th) * std::sin(az), 150 * std::cos(th)};
         pts.push_back(d);
-        dl.push_back(norm({d[0] + e[0], d[1] + e[1], d[2] + e[2]}) - 150.0);
+        dl.push_back(norm_solve({d[0] + e[0], d[1] + e[1], d[2] + e[2]}) - 150.0);
     }
     const json req6{{"socket_mm", {0, 0, 0}},
                     {"points_mm", pts},
@@ -129,7 +129,7 @@ TEST(CliSolve, SsmFromInputFileWithSixPoints) {
                     {"nominal_mm", {150, 150, 150, 150, 150, 150}}};
     const fs::path file = fs::temp_directory_path() / ("ballbar-solve-" + std::to_string(::getpid()) + ".json");
     std::ofstream(file) << req6.dump();
-    const Proc r = run("solve ssm --input '" + file.string() + "'");
+    const Proc r = run_solve("solve ssm --input '" + file.string() + "'");
     fs::remove(file);
     ASSERT_EQ(r.code, 0) << r.err;
     const json out = json::parse(r.out);
@@ -149,7 +149,7 @@ TEST(CliSolve, OrientationRrtttTable1) {
                        {"beta_rad", c["beta_rad"]},
                        {"dV1_mm", {c["dxV1"], c["dyV1"], c["dzV1"]}},
                        {"dV2_mm", {c["dxV2"], c["dyV2"], c["dzV2"]}}};
-        const Proc r = run("solve orientation", req.dump());
+        const Proc r = run_solve("solve orientation", req.dump());
         ASSERT_EQ(r.code, 0) << r.err;
         const json out = json::parse(r.out);
         expect_rel(out["first_order"]["d_beta_rad"], c["eq6_dbeta_rad"]);
@@ -181,7 +181,7 @@ TEST(CliSolve, OrientationTttrrRecoversInjectedErrors) {
                    {"gamma_rad", g},
                    {"dV1_mm", dv1},
                    {"dV2_mm", {act[0] - nom[0], act[1] - nom[1], act[2] - nom[2]}}};
-    const Proc r = run("solve orientation", req.dump());
+    const Proc r = run_solve("solve orientation", req.dump());
     ASSERT_EQ(r.code, 0) << r.err;
     const json out = json::parse(r.out);
     EXPECT_NEAR(out["exact"]["d_alpha_rad"].get<double>(), da, 1e-11);
@@ -215,7 +215,7 @@ TEST(CliSolve, OrientationRtttrPartsAndSingular) {
           {"dV2_mm",
            {0, (t[1] * ca - t[2] * sa) - (t[1] * c0 - t[2] * s0),
             (t[1] * sa + t[2] * ca) - (t[1] * s0 + t[2] * c0)}}}}};
-    const Proc r = run("solve orientation", req.dump());
+    const Proc r = run_solve("solve orientation", req.dump());
     ASSERT_EQ(r.code, 0) << r.err;
     const json out = json::parse(r.out);
     EXPECT_TRUE(out["first_order"]["d_beta_rad"].is_null());
@@ -228,7 +228,7 @@ TEST(CliSolve, OrientationRtttrPartsAndSingular) {
     // Only the table part: no d_beta_rad at all.
     json only_table = req;
     only_table.erase("spindle");
-    const Proc r2 = run("solve orientation", only_table.dump());
+    const Proc r2 = run_solve("solve orientation", only_table.dump());
     ASSERT_EQ(r2.code, 0) << r2.err;
     const json out2 = json::parse(r2.out);
     EXPECT_FALSE(out2["exact"].contains("d_beta_rad"));
@@ -239,7 +239,7 @@ TEST(CliSolve, SingularRrtttAnswersNullWithReason) {
     const json req{{"machine", "RRTTT"}, {"pivot_mm", {0, 0, 500}}, {"tool_ball_mm", {0, 0, -250}},
                    {"alpha_rad", 0.2},   {"beta_rad", M_PI / 2},    {"dV1_mm", {0, 0, 0}},
                    {"dV2_mm", {0, 0, 0}}};
-    const Proc r = run("solve orientation", req.dump());
+    const Proc r = run_solve("solve orientation", req.dump());
     ASSERT_EQ(r.code, 0) << r.err;
     const json out = json::parse(r.out);
     EXPECT_TRUE(out["first_order"].is_null());
@@ -250,62 +250,64 @@ TEST(CliSolve, SingularRrtttAnswersNullWithReason) {
 TEST(CliSolve, MalformedRequestsNameTheField) {
     json bad_point = ssm_request({0, 0, 0});
     bad_point["points_mm"][2] = {1.0, 2.0};
-    expect_field_error(run("solve ssm", bad_point.dump()), "points_mm[2]");
+    expect_field_error_solve(run_solve("solve ssm", bad_point.dump()), "points_mm[2]");
 
     json bad_number = ssm_request({0, 0, 0});
     bad_number["points_mm"][1][2] = "ten";
-    expect_field_error(run("solve ssm", bad_number.dump()), "points_mm[1][2]");
+    expect_field_error_solve(run_solve("solve ssm", bad_number.dump()), "points_mm[1][2]");
 
     json missing = ssm_request({0, 0, 0});
     missing.erase("delta_l_mm");
-    expect_field_error(run("solve ssm", missing.dump()), "delta_l_mm");
+    expect_field_error_solve(run_solve("solve ssm", missing.dump()), "delta_l_mm");
 
     json short_dl = ssm_request({0, 0, 0});
     short_dl["delta_l_mm"].erase(2);
-    expect_field_error(run("solve ssm", short_dl.dump()), "delta_l_mm");
+    expect_field_error_solve(run_solve("solve ssm", short_dl.dump()), "delta_l_mm");
 
     json unknown = ssm_request({0, 0, 0});
     unknown["delta_l"] = 1;
-    expect_field_error(run("solve ssm", unknown.dump()), "delta_l");
+    expect_field_error_solve(run_solve("solve ssm", unknown.dump()), "delta_l");
 
     json negative_std = ssm_request({0, 0, 0});
     negative_std["std_mm"] = -1;
-    expect_field_error(run("solve ssm", negative_std.dump()), "std_mm");
+    expect_field_error_solve(run_solve("solve ssm", negative_std.dump()), "std_mm");
 
     // A degenerate layout: all bars in one plane through the socket.
     const json planar{
         {"socket_mm", {0, 0, 0}}, {"points_mm", {{100, 0, 0}, {0, 100, 0}, {70, 70, 0}}}, {"delta_l_mm", {0, 0, 0}}};
-    const Proc rp = run("solve ssm", planar.dump());
-    expect_field_error(rp, "points_mm");
+    const Proc rp = run_solve("solve ssm", planar.dump());
+    expect_field_error_solve(rp, "points_mm");
     EXPECT_NE(rp.err.find("condition number"), std::string::npos) << rp.err;
 
-    const Proc not_json = run("solve ssm", "{\"socket_mm\": [1, 2");
+    const Proc not_json = run_solve("solve ssm", "{\"socket_mm\": [1, 2");
     EXPECT_EQ(not_json.code, 2);
     EXPECT_NE(json::parse(not_json.err).at("error").get<std::string>().find("malformed JSON"), std::string::npos);
 
-    expect_field_error(run("solve orientation", R"({"machine":"XYZAB"})"), "machine");
-    expect_field_error(run("solve orientation", R"({"machine":"RRTTT","pivot_mm":[0,0,0],"tool_ball_mm":[1,0,-250],
+    expect_field_error_solve(run_solve("solve orientation", R"({"machine":"XYZAB"})"), "machine");
+    expect_field_error_solve(
+        run_solve("solve orientation", R"({"machine":"RRTTT","pivot_mm":[0,0,0],"tool_ball_mm":[1,0,-250],
         "alpha_rad":0,"beta_rad":0,"dV1_mm":[0,0,0],"dV2_mm":[0,0,0]})"),
-                       "tool_ball_mm[0]");
-    expect_field_error(run("solve orientation", R"({"machine":"RTTTR","spindle":{"pivot_mm":[0,0,0],
+        "tool_ball_mm[0]");
+    expect_field_error_solve(run_solve("solve orientation", R"({"machine":"RTTTR","spindle":{"pivot_mm":[0,0,0],
         "tool_ball_mm":[0,0,-250],"beta_rad":"x","dV1_mm":[0,0,0],"dV2_mm":[0,0,0]}})"),
-                       "spindle.beta_rad");
-    expect_field_error(run("solve orientation", R"({"machine":"RTTTR"})"), "spindle");
-    expect_field_error(run("solve orientation", R"({"machine":"TTTRR","a_pivot_mm":[0,0,0],"c_offset_mm":[0,0,-100],
+                             "spindle.beta_rad");
+    expect_field_error_solve(run_solve("solve orientation", R"({"machine":"RTTTR"})"), "spindle");
+    expect_field_error_solve(
+        run_solve("solve orientation", R"({"machine":"TTTRR","a_pivot_mm":[0,0,0],"c_offset_mm":[0,0,-100],
         "socket_mm":[1,2,3],"alpha_rad":0,"gamma_rad":0,"dV1_mm":[0,0,0]})"),
-                       "dV2_mm");
+        "dV2_mm");
 
-    const Proc no_file = run("solve ssm --input /nonexistent/request.json");
-    expect_field_error(no_file, "--input");
+    const Proc no_file = run_solve("solve ssm --input /nonexistent/request.json");
+    expect_field_error_solve(no_file, "--input");
 }
 
 TEST(CliSolve, HelpOnEverySubcommandAndUsage) {
     for (const char* args : {"solve --help", "solve ssm --help", "solve orientation --help"}) {
-        const Proc r = run(args);
+        const Proc r = run_solve(args);
         EXPECT_EQ(r.code, 0) << args << ": " << r.err;
         EXPECT_NE(r.out.find("solve"), std::string::npos) << args;
     }
-    EXPECT_NE(run("solve ssm --help").out.find("--input"), std::string::npos);
-    EXPECT_NE(run("solve orientation --help").out.find("TTTRR"), std::string::npos);
-    EXPECT_EQ(run("solve").code, 2) << "a subcommand is required";
+    EXPECT_NE(run_solve("solve ssm --help").out.find("--input"), std::string::npos);
+    EXPECT_NE(run_solve("solve orientation --help").out.find("TTTRR"), std::string::npos);
+    EXPECT_EQ(run_solve("solve").code, 2) << "a subcommand is required";
 }

@@ -42,14 +42,14 @@ const std::string kPlanTests =
 const std::string kModelMachine =
     R"("machine":{"type":"TTTRR","a_pivot_mm":[0,0,0],"c_offset_mm":[0,0,-100],"tool_ball_mm":[0,0,0]})";
 const std::string kModel = R"({"format":"ballbar-model/1",)" + kModelMachine + R"(,"params":{"X0C":0.01}})";
-const std::string kProgram = "%\nO0001\nG90 G21\nG0 X0 Y0 Z0 A0 C0\nG1 X10 F1000\nM30\n%\n";
+const std::string kProgramValidatedValues = "%\nO0001\nG90 G21\nG0 X0 Y0 Z0 A0 C0\nG1 X10 F1000\nM30\n%\n";
 const std::string kTestHeader =
     R"(# test: {"kind": "circular", "plane": "XY", "radius_mm": 100.0, "centre_mm": [0, 0, 0], )"
     R"("feed_mm_min": 1000.0, "feed_in_mm": 1.5, "runs": [{"direction": "ccw", "start_deg": 0, )"
     R"("overshoot_deg": 45, "data_arc_deg": 360}]})";
 const std::string kCompensate = "compensate --model m.json --program p.nc --out {dir}/out.nc";
 
-std::string expand(std::string args, const std::string& dir) {
+std::string expand_validated_values(std::string args, const std::string& dir) {
     for (std::size_t at; (at = args.find("{dir}")) != std::string::npos;) args.replace(at, 5, dir);
     return args;
 }
@@ -66,7 +66,7 @@ TEST_P(RefusedInput, ExitsTwoNamingTheField) {
             args.replace(at + 1, name.size(), dir.file(name));
         }
     }
-    const CliRun r = run(dir, expand(args, dir.path.string()), c.input);
+    const CliRun r = run(dir, expand_validated_values(args, dir.path.string()), c.input);
     EXPECT_EQ(r.code, 2) << r.err << r.out;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir.file("out.nc"))) << "nothing is written";
@@ -152,19 +152,19 @@ INSTANTIATE_TEST_SUITE_P(
             "analyze_tolerance_inf", {}, "circle analyze x.csv --tolerance inf", "--tolerance: inf is not a finite"},
         Refusal{"report_tolerance_negative", {}, "report 1 --tolerance -3", "--tolerance: -3 is outside (0, 10000]"},
         Refusal{"compensate_chord_1000",
-                {{"m.json", kModel}, {"p.nc", kProgram}},
+                {{"m.json", kModel}, {"p.nc", kProgramValidatedValues}},
                 kCompensate + " --chord-tolerance 1000",
                 "--chord-tolerance: 1000 is outside [1e-05, 0.1] mm"},
         Refusal{"compensate_chord_inf",
-                {{"m.json", kModel}, {"p.nc", kProgram}},
+                {{"m.json", kModel}, {"p.nc", kProgramValidatedValues}},
                 kCompensate + " --chord-tolerance inf",
                 "--chord-tolerance: inf is not a finite number"},
         Refusal{"compensate_chord_1e308",
-                {{"m.json", kModel}, {"p.nc", kProgram}},
+                {{"m.json", kModel}, {"p.nc", kProgramValidatedValues}},
                 kCompensate + " --chord-tolerance 1e308",
                 "--chord-tolerance: 1e308 is outside"},
         Refusal{"compensate_singular_nan",
-                {{"m.json", kModel}, {"p.nc", kProgram}},
+                {{"m.json", kModel}, {"p.nc", kProgramValidatedValues}},
                 kCompensate + " --singular-deg nan",
                 "--singular-deg: nan is not a finite number"},
         Refusal{"discover_noise_nan", {}, "discover x.csv --noise-um nan", "--noise-um: nan is not a finite number"},
@@ -190,26 +190,30 @@ INSTANTIATE_TEST_SUITE_P(
         // models and offsets tables (compensate)
         Refusal{"model_param_1e308",
                 {{"m.json", R"({"format":"ballbar-model/1",)" + kModelMachine + R"(,"params":{"X0C":1e308}})"},
-                 {"p.nc", kProgram}},
+                 {"p.nc", kProgramValidatedValues}},
                 kCompensate,
                 "params.X0C = 1e+308 is outside [-1000, 1000] mm"},
         Refusal{"model_unknown_key",
                 {{"m.json", R"({"format":"ballbar-model/1",)" + kModelMachine + R"(,"params":{},"parms":{}})"},
-                 {"p.nc", kProgram}},
+                 {"p.nc", kProgramValidatedValues}},
                 kCompensate,
                 "parms: unknown key"},
         Refusal{"model_machine_1e308",
                 {{"m.json", R"({"machine":{"type":"TTTRR","a_pivot_mm":[0,0,0],"c_offset_mm":[0,0,1e308],)"
                             R"("tool_ball_mm":[0,0,0]},"params":{}})"},
-                 {"p.nc", kProgram}},
+                 {"p.nc", kProgramValidatedValues}},
                 kCompensate,
                 "machine.c_offset_mm[2] = 1e+308"},
         Refusal{"offsets_1e308",
-                {{"m.json", kModel}, {"p.nc", kProgram}, {"o.json", R"({"work_offsets":{"G54":{"X_mm":1e308}}})"}},
+                {{"m.json", kModel},
+                 {"p.nc", kProgramValidatedValues},
+                 {"o.json", R"({"work_offsets":{"G54":{"X_mm":1e308}}})"}},
                 kCompensate + " --offsets o.json",
                 "work_offsets.G54.X_mm = 1e+308 is outside"},
         Refusal{"offsets_rotary_1e308",
-                {{"m.json", kModel}, {"p.nc", kProgram}, {"o.json", R"({"work_offsets":{"G54":{"C_deg":1e308}}})"}},
+                {{"m.json", kModel},
+                 {"p.nc", kProgramValidatedValues},
+                 {"o.json", R"({"work_offsets":{"G54":{"C_deg":1e308}}})"}},
                 kCompensate + " --offsets o.json",
                 "work_offsets.G54.C_deg = 1e+308 is outside [-36000, 36000] deg"},
         Refusal{"compensated_word_beyond_the_format",

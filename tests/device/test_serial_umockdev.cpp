@@ -212,7 +212,7 @@ bool preload_active() {
     return p && std::string(p).find("libumockdev-preload") != std::string::npos;
 }
 
-std::size_t stream(Instrument& inst, std::size_t wanted) {
+std::size_t stream_serial_umockdev(Instrument& inst, std::size_t wanted) {
     std::vector<analysis::BarSample> buf(4096);
     std::size_t have = 0;
     std::uint64_t first = 0;
@@ -269,7 +269,7 @@ TEST_F(SerialUmockdev, IdentifyAndStreamThroughLibserialport) {
     EXPECT_EQ(inst.identify().serial, "EMU00001");
     EXPECT_EQ(inst.status().sample_rate_hz, 5000);
     inst.start_streaming();
-    EXPECT_GE(stream(inst, 20000), 20000u);
+    EXPECT_GE(stream_serial_umockdev(inst, 20000), 20000u);
     inst.stop_streaming();
     EXPECT_EQ(inst.stats().lost_frames, 0u);
     EXPECT_EQ(inst.stats().invalid_frames, 0u);
@@ -298,10 +298,10 @@ TEST_F(SerialUmockdev, UnplugMidStreamThenReplug) {
         Instrument inst(open_serial_transport("/dev/ttyACM0"));
         inst.identify();
         inst.start_streaming();
-        ASSERT_GE(stream(inst, 2000), 2000u);
+        ASSERT_GE(stream_serial_umockdev(inst, 2000), 2000u);
         acm_->unplug();
         try {
-            stream(inst, 100'000'000);
+            stream_serial_umockdev(inst, 100'000'000);
             FAIL() << "the unplug was not reported";
         } catch (const DeviceError& e) {
             EXPECT_EQ(e.kind(), DeviceErrorKind::Disconnected) << e.what();
@@ -322,6 +322,6 @@ TEST_F(SerialUmockdev, UnplugMidStreamThenReplug) {
     EXPECT_EQ(again.identify().serial, "EMU00001");
     EXPECT_FALSE(again.status().streaming);  // the unplug stopped the stream
     again.start_streaming();
-    EXPECT_GE(stream(again, 5000), 5000u);
+    EXPECT_GE(stream_serial_umockdev(again, 5000), 5000u);
     EXPECT_EQ(again.stats().lost_frames, 0u);
 }

@@ -29,11 +29,11 @@ struct FakeItnDevice::Handle {
 
 namespace {
 
-constexpr std::uint8_t kEpIn = 0x81;
-const char* const kManufacturer = "Mitutoyo";
-const char* const kProduct = "USB-ITN";
+constexpr std::uint8_t kEpInItn = 0x81;
+const char* const kItnManufacturer = "Mitutoyo";
+const char* const kItnProduct = "USB-ITN";
 
-void release(FakeItnDevice::Urb* u);
+void release_itn(FakeItnDevice::Urb* u);
 
 }  // namespace
 
@@ -46,8 +46,8 @@ FakeItnDevice::~FakeItnDevice() {
         g_object_unref(h->base);
         delete h;
     }
-    for (Urb* u : pending_in_) release(u);
-    for (Urb* u : done_) release(u);
+    for (Urb* u : pending_in_) release_itn(u);
+    for (Urb* u : done_) release_itn(u);
 }
 
 std::string FakeItnDevice::node() const {
@@ -86,7 +86,7 @@ std::string FakeItnDevice::description() const {
         // HID descriptor: HID 1.11, one report descriptor of 63 bytes
         0x09, 0x21, 0x11, 0x01, 0x00, 0x01, 0x22, 0x3f, 0x00,
         // interrupt IN 0x81, 8-byte reports, every 10 ms
-        0x07, 0x05, kEpIn, 0x03, 0x08, 0x00, 0x0a};
+        0x07, 0x05, kEpInItn, 0x03, 0x08, 0x00, 0x0a};
     char vp[16];
     std::snprintf(vp, sizeof vp, "%04x/%x/100", vid_, pid_);
     char num[8];
@@ -104,8 +104,8 @@ std::string FakeItnDevice::description() const {
     d += "A: busnum=1\\n\nA: devnum=" + std::to_string(devnum_) + "\\n\n";
     d += "A: speed=12\\n\nA: bcdDevice=0100\\n\nA: bConfigurationValue=1\\n\nA: bNumConfigurations=1\\n\n";
     d += "A: bDeviceClass=00\\n\nA: bMaxPacketSize0=64\\n\n";
-    d += std::string("A: manufacturer=") + kManufacturer + "\\n\n";
-    d += std::string("A: product=") + kProduct + "\\n\n";
+    d += std::string("A: manufacturer=") + kItnManufacturer + "\\n\n";
+    d += std::string("A: product=") + kItnProduct + "\\n\n";
     d += "A: serial=" + serial_ + "\\n\n";
     d += "A: dev=189:" + std::to_string(devnum_ - 1) + "\\n\n";
     d += "A: devpath=" + std::to_string(port_) + "\\n\n";
@@ -195,7 +195,7 @@ int FakeItnDevice::control_locked(Urb* u) {
         d[3] = 0x04;
         n = 4;
     } else {
-        const std::string s = index == 1 ? kManufacturer : index == 2 ? kProduct : index == 3 ? serial_ : "";
+        const std::string s = index == 1 ? kItnManufacturer : index == 2 ? kItnProduct : index == 3 ? serial_ : "";
         if (index > 3) return -EPIPE;
         for (char c : s) {
             d[n++] = static_cast<std::uint8_t>(c);
@@ -211,13 +211,13 @@ int FakeItnDevice::control_locked(Urb* u) {
 
 namespace {
 
-void release(FakeItnDevice::Urb* u) {
+void release_itn(FakeItnDevice::Urb* u) {
     g_object_unref(u->buf);
     g_object_unref(u->urb);
     delete u;
 }
 
-void complete(UMockdevIoctlClient* c, long result, int err) {
+void complete_itn(UMockdevIoctlClient* c, long result, int err) {
     umockdev_ioctl_client_complete(c, result, err);
 }
 
@@ -238,20 +238,20 @@ int FakeItnDevice::on_ioctl(void* /*handler*/, void* client, void* user_data) {
         auto it = std::find_if(dev.done_.begin(), dev.done_.end(),
                                [h](const Urb* x) { return x->generation == h->generation; });
         if (it == dev.done_.end()) {
-            complete(c, -1, alive ? EAGAIN : ENODEV);
+            complete_itn(c, -1, alive ? EAGAIN : ENODEV);
             return TRUE;
         }
         Urb* u = *it;
         dev.done_.erase(it);
         UMockdevIoctlData* slot = umockdev_ioctl_data_resolve(arg, 0, sizeof(void*), nullptr);
         umockdev_ioctl_data_set_ptr(slot, 0, u->urb);  // *arg = the client's urb pointer
-        complete(c, 0, 0);                             // syncs urb + buffer back to the client
+        complete_itn(c, 0, 0);                         // syncs urb + buffer back to the client
         g_object_unref(slot);
-        release(u);
+        release_itn(u);
         return TRUE;
     }
     if (!alive) {
-        complete(c, -1, ENODEV);
+        complete_itn(c, -1, ENODEV);
         return TRUE;
     }
     switch (req) {
@@ -259,7 +259,7 @@ int FakeItnDevice::on_ioctl(void* /*handler*/, void* client, void* user_data) {
             UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, 4, nullptr);
             const std::uint32_t caps = USBDEVFS_CAP_NO_PACKET_SIZE_LIM | USBDEVFS_CAP_ZERO_PACKET;
             std::memcpy(d->data, &caps, sizeof caps);
-            complete(c, 0, 0);
+            complete_itn(c, 0, 0);
             g_object_unref(d);
             return TRUE;
         }
@@ -269,7 +269,7 @@ int FakeItnDevice::on_ioctl(void* /*handler*/, void* client, void* user_data) {
         case USBDEVFS_CLEAR_HALT:
         case USBDEVFS_RESET:
         case USBDEVFS_SETINTERFACE:
-            complete(c, 0, 0);
+            complete_itn(c, 0, 0);
             return TRUE;
         case USBDEVFS_SUBMITURB: {
             auto* u =
@@ -280,15 +280,15 @@ int FakeItnDevice::on_ioctl(void* /*handler*/, void* client, void* user_data) {
             if (urb->type == USBDEVFS_URB_TYPE_CONTROL) {
                 const int r = dev.control_locked(u);
                 dev.complete_locked(u, r < 0 ? r : 0, r < 0 ? 0 : r);
-            } else if (urb->type == USBDEVFS_URB_TYPE_INTERRUPT && urb->endpoint == kEpIn) {
+            } else if (urb->type == USBDEVFS_URB_TYPE_INTERRUPT && urb->endpoint == kEpInItn) {
                 dev.pending_in_.push_back(u);
             } else {
-                release(u);
-                complete(c, -1, EINVAL);
+                release_itn(u);
+                complete_itn(c, -1, EINVAL);
                 return TRUE;
             }
             dev.pump_locked();
-            complete(c, 0, 0);
+            complete_itn(c, 0, 0);
             return TRUE;
         }
         case USBDEVFS_DISCARDURB: {  // arg is the client's address of the URB
@@ -297,15 +297,15 @@ int FakeItnDevice::on_ioctl(void* /*handler*/, void* client, void* user_data) {
                     Urb* u = *it;
                     dev.pending_in_.erase(it);
                     dev.complete_locked(u, -ENOENT, 0);
-                    complete(c, 0, 0);
+                    complete_itn(c, 0, 0);
                     return TRUE;
                 }
             }
-            complete(c, -1, EINVAL);
+            complete_itn(c, -1, EINVAL);
             return TRUE;
         }
         default:
-            complete(c, -1, ENOTTY);
+            complete_itn(c, -1, ENOTTY);
             return TRUE;
     }
 }

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../scratch_dir.hpp"
 #include "ballbar/fileio/input.hpp"
 
 using namespace ballbar::fileio;
@@ -19,18 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Dir {
-    fs::path path;
-    Dir() {
-        char tmpl[] = "/tmp/ballbar-fileio-XXXXXX";
-        path = ::mkdtemp(tmpl);
-    }
-    ~Dir() { fs::remove_all(path); }
-    std::string write(const std::string& name, const std::string& text) const {
-        std::ofstream(path / name, std::ios::binary) << text;
-        return (path / name).string();
-    }
-};
+using Dir = ballbar::test::ScratchDir;
 
 std::string refusal(const std::function<void()>& f) {
     try {
@@ -51,7 +41,7 @@ std::vector<std::string> lines_of(const std::string& path, std::size_t max_line 
 }
 
 TEST(FileioInput, RegularFilesOnly) {
-    Dir d;
+    Dir d{"fileio"};
     EXPECT_NE(refusal([&] { InputFile::open(d.path.string(), "readings file"); }).find("is a directory"),
               std::string::npos);
     EXPECT_NE(refusal([&] { InputFile::open("/dev/zero", "readings file"); }).find("a character device"),
@@ -66,7 +56,7 @@ TEST(FileioInput, RegularFilesOnly) {
 }
 
 TEST(FileioInput, SizeCapIsCheckedBeforeReading) {
-    Dir d;
+    Dir d{"fileio"};
     { std::ofstream(d.path / "sparse"); }
     fs::resize_file(d.path / "sparse", 10ull << 30);  // 10 GB of holes
     const std::string msg = refusal([&] { read_whole((d.path / "sparse").string(), "machine file", kMaxJsonBytes); });
@@ -80,14 +70,14 @@ TEST(FileioInput, SizeCapIsCheckedBeforeReading) {
 }
 
 TEST(FileioInput, LinesWithLfCrlfAndNoFinalNewline) {
-    Dir d;
+    Dir d{"fileio"};
     EXPECT_EQ(lines_of(d.write("a", "one\ntwo\r\n\nthree")), (std::vector<std::string>{"one", "two", "", "three"}));
     EXPECT_EQ(lines_of(d.write("b", "")), std::vector<std::string>{});
     EXPECT_EQ(lines_of(d.write("c", "\n")), std::vector<std::string>{""});
 }
 
 TEST(FileioInput, LinesAcrossEveryBufferBoundary) {
-    Dir d;
+    Dir d{"fileio"};
     // Line lengths around the 64 KiB read size, so lines straddle every kind of boundary.
     std::string text;
     std::vector<std::string> expected;
@@ -101,7 +91,7 @@ TEST(FileioInput, LinesAcrossEveryBufferBoundary) {
 // The tap (import's hash) sees the file's bytes exactly: each once, in order, line ends included,
 // across the reader's buffer boundaries and with no final newline.
 TEST(FileioInput, TheTapSeesEveryByteOnceInOrder) {
-    Dir d;
+    Dir d{"fileio"};
     std::string text;
     for (std::size_t n : {0u, 65535u, 1u, 65536u, 200000u, 2u}) text += std::string(n, 'x') + (n % 2 ? "\r\n" : "\n");
     text += "last line without a newline";
@@ -115,7 +105,7 @@ TEST(FileioInput, TheTapSeesEveryByteOnceInOrder) {
 }
 
 TEST(FileioInput, ALineLongerThanTheLimitIsRefusedWithItsNumber) {
-    Dir d;
+    Dir d{"fileio"};
     const std::string path = d.write("long", "ok\nok\n" + std::string(1001, 'z') + "\nok\n");
     LineReader r(InputFile::open(path, "trace file"), 1000);
     EXPECT_EQ(*r.next(), "ok");

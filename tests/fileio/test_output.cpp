@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "../scratch_dir.hpp"
 #include "ballbar/fileio/output.hpp"
 
 using namespace ballbar::fileio;
@@ -17,20 +18,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Dir {
-    fs::path path;
-    Dir() {
-        char tmpl[] = "/tmp/ballbar-fileio-XXXXXX";
-        path = ::mkdtemp(tmpl);
-    }
-    ~Dir() { fs::remove_all(path); }
-    std::string file(const std::string& name) const { return (path / name).string(); }
-    std::size_t entries() const {
-        std::size_t n = 0;
-        for ([[maybe_unused]] const auto& e : fs::directory_iterator(path)) ++n;
-        return n;
-    }
-};
+using Dir = ballbar::test::ScratchDir;
 
 std::string slurp(const std::string& p) {
     std::ifstream in(p, std::ios::binary);
@@ -51,7 +39,7 @@ FileError::Kind kind_of(const std::function<void()>& f, std::string& message) {
 }
 
 TEST(FileioOutput, TheTargetChangesOnlyAtCommit) {
-    Dir d;
+    Dir d{"fileio"};
     std::ofstream(d.file("out")) << "old";
     {
         OutputFile out(d.file("out"), "--out");
@@ -67,7 +55,7 @@ TEST(FileioOutput, TheTargetChangesOnlyAtCommit) {
 }
 
 TEST(FileioOutput, PlantedTemporaryNamesAreNeitherFollowedNorDeleted) {
-    Dir d;
+    Dir d{"fileio"};
     std::ofstream(d.file("victim")) << "victim";
     fs::create_symlink(d.file("victim"), d.file("out.tmp"));
     fs::create_symlink(d.file("victim"), d.file("out.part"));
@@ -80,7 +68,7 @@ TEST(FileioOutput, PlantedTemporaryNamesAreNeitherFollowedNorDeleted) {
 }
 
 TEST(FileioOutput, RefusesInputsByInodeLinksAndDirectories) {
-    Dir d;
+    Dir d{"fileio"};
     std::ofstream(d.file("db")) << "database";
     fs::create_hard_link(d.file("db"), d.file("alias"));
     const std::vector<Protected> inputs = {{d.file("db"), "database"}};
@@ -98,7 +86,7 @@ TEST(FileioOutput, RefusesInputsByInodeLinksAndDirectories) {
 }
 
 TEST(FileioOutput, KeepsPermissionsAndWritesDevicesDirectly) {
-    Dir d;
+    Dir d{"fileio"};
     std::ofstream(d.file("out")) << "old";
     fs::permissions(d.file("out"), fs::perms::owner_read | fs::perms::owner_write);
     write_file(d.file("out"), "--out", "new");
@@ -108,7 +96,7 @@ TEST(FileioOutput, KeepsPermissionsAndWritesDevicesDirectly) {
 }
 
 TEST(FileioOutput, StreamsThroughAnOstream) {
-    Dir d;
+    Dir d{"fileio"};
     OutputStream out(d.file("csv"), "--out");
     for (int i = 0; i < 100000; ++i) out << i << '\n';  // several 64 KiB buffers
     out.commit();

@@ -1,20 +1,20 @@
 #!/usr/bin/env bash
-# The CLI is compiled in unity batches (CMakeLists.txt, BALLBAR_UNITY_BUILD): several .cpp files of
-# app/ in one translation unit, so the helpers each file keeps in its anonymous namespace meet. Two of the same name do not always fail to compile: an overload of another file can
+# The CLI and the test executables are compiled in unity batches (CMakeLists.txt, BALLBAR_UNITY_BUILD):
+# several .cpp files of app/, or of one folder of tests/, in one translation unit, so the helpers each file keeps in its anonymous namespace meet. Two of the same name do not always fail to compile: an overload of another file can
 # be chosen silently (a CSV helper `opt` once turned `sessions show`'s null temperatures into ""). This
 # fails when two files of one target define a free function or a namespace-scope constant of the same
-# name (a library made a unity target joins the list below). usage: check_unity_names.sh SOURCE_DIR
+# name (a test folder counts as one target; a library made a unity target joins the list below). usage: check_unity_names.sh SOURCE_DIR
 set -u
 root="${1:?usage: check_unity_names.sh SOURCE_DIR}"
 status=0
-for dir in app; do
+for dir in app $(cd "$root" && ls -d tests/*/ | sed 's|/$||'); do
   files=$(find "$root/$dir" -name '*.cpp' | sort)
   [ -n "$files" ] || continue
   # Definitions at column 0: "type name(" (not "Class::name(", not a control statement) and
   # "constexpr/const type name =".
   dups=$(for f in $files; do
-      grep -oE '^[A-Za-z_][A-Za-z0-9_:<>,*& ]*[ *&]([A-Za-z_][A-Za-z0-9_]*)\(|^(static )?(inline )?(constexpr|const) [A-Za-z0-9_:<> ]+ (k?[A-Za-z_][A-Za-z0-9_]*)( =|\[)' "$f" |
-        grep -vE '^(return|else|case|namespace|using|typedef|if|for|while|switch) ' |
+      grep -oE '^[A-Za-z_][A-Za-z0-9_:<>,*& ]*[ *&]([A-Za-z_][A-Za-z0-9_]*)\(|^(static )?(inline )?(constexpr|const) [A-Za-z0-9_:<>*& ]+ (k?[A-Za-z_][A-Za-z0-9_]*)( =|\[)' "$f" |
+        grep -vE '^(return|else|case|namespace|using|typedef|if|for|while|switch|INSERT|CREATE|SELECT|UPDATE|DELETE) ' |
         sed -E 's/\($//; s/( =|\[)$//; s/.*[ *&]//' | grep -v '::' | sort -u | sed "s|\$| ${f#$root/}|"
     done | sort | awk '{n[$1]++; f[$1]=f[$1] " " $2} END {for (k in n) if (n[k] > 1) print k ":" f[k]}')
   if [ -n "$dups" ]; then

@@ -24,7 +24,7 @@ using testing::plus_minus_text;
 using testing::run_capture;
 using testing::TempDir;
 
-int run(const std::string& command) {
+int run_circular(const std::string& command) {
     const int rc = std::system(command.c_str());
     return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
@@ -123,7 +123,7 @@ TEST(CliReportCircular, ImportedTraceReportHoldsTheAnalysisAndTheVerdict) {
 
 TEST(CliReportCircular, StoredToleranceAndFailingVerdict) {
     Imported s;
-    ASSERT_EQ(run(s.cmd("circle analyze " + s.id + " --tolerance 0.5 >/dev/null 2>&1")), 1);  // stored, fails
+    ASSERT_EQ(run_circular(s.cmd("circle analyze " + s.id + " --tolerance 0.5 >/dev/null 2>&1")), 1);  // stored, fails
     const auto pdf = s.dir.path / "r.pdf";
     const auto j = nlohmann::json::parse(
         run_capture(s.cmd("report " + s.id + " --out " + testing::quoted(pdf) + " --json 2>/dev/null")));
@@ -137,7 +137,7 @@ TEST(CliReportCircular, StoredToleranceAndFailingVerdict) {
     // The command line's tolerance wins over the stored one.
     const auto given = nlohmann::json::parse(run_capture(s.cmd("report " + s.id + " --json --tolerance 60")));
     EXPECT_TRUE(given["circular"]["tolerance"]["pass"].get<bool>());
-    EXPECT_EQ(run(s.cmd("report " + s.id + " --json --tolerance -3 >/dev/null 2>&1")), 2);
+    EXPECT_EQ(run_circular(s.cmd("report " + s.id + " --json --tolerance -3 >/dev/null 2>&1")), 2);
 }
 
 TEST(CliReportCircular, WithoutAStoredResultTheReportAnalyses) {

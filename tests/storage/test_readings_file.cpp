@@ -13,7 +13,7 @@
 namespace ballbar::storage {
 namespace {
 
-const std::string kDir = std::string(BALLBAR_TEST_DATA_DIR) + "/readings/";
+const std::string kDirReadingsFile = std::string(BALLBAR_TEST_DATA_DIR) + "/readings/";
 
 void expect_same(const analysis::ReadingSet& a, const analysis::ReadingSet& b) {
     EXPECT_EQ(a.machine.type, b.machine.type);
@@ -47,7 +47,7 @@ void expect_same(const analysis::ReadingSet& a, const analysis::ReadingSet& b) {
 }
 
 TEST(ReadingsFile, ParsesTheSpecExample) {
-    const auto f = read_readings_file(kDir + "spec_example.csv");
+    const auto f = read_readings_file(kDirReadingsFile + "spec_example.csv");
     EXPECT_EQ(f.set.machine.type, analysis::MachineType::TTTRR);
     EXPECT_EQ(f.set.machine.c_offset_mm, analysis::Vec3(0, 0, -100));
     ASSERT_EQ(f.set.readings.size(), 1u);
@@ -69,7 +69,7 @@ TEST(ReadingsFile, ParsesTheSpecExample) {
 }
 
 TEST(ReadingsFile, ColumnsByNameInAnyOrderWithQuotesCrlfAndUnknownColumnsWarnedOnce) {
-    const auto f = read_readings_file(kDir + "tttrr_full_crlf.csv");
+    const auto f = read_readings_file(kDirReadingsFile + "tttrr_full_crlf.csv");
     ASSERT_EQ(f.set.readings.size(), 8u);
     const auto& r = f.set.readings[5];
     EXPECT_EQ(r.location, 1);
@@ -96,13 +96,13 @@ TEST(ReadingsFile, ColumnsByNameInAnyOrderWithQuotesCrlfAndUnknownColumnsWarnedO
 }
 
 TEST(ReadingsFile, RecomputesNominalForAllTypesAndReportsDisagreement) {
-    const auto rr = read_readings_file(kDir + "rrttt_minimal.csv");
+    const auto rr = read_readings_file(kDirReadingsFile + "rrttt_minimal.csv");
     EXPECT_EQ(rr.set.machine.type, analysis::MachineType::RRTTT);
     EXPECT_EQ(rr.set.readings.size(), 5u);
     EXPECT_TRUE(rr.nominal_mismatches.empty());
     EXPECT_DOUBLE_EQ(rr.set.readings[2].pose.B_rad, analysis::deg_to_rad(30));
 
-    const auto rt = read_readings_file(kDir + "rtttr_nominal_mismatch.csv");
+    const auto rt = read_readings_file(kDirReadingsFile + "rtttr_nominal_mismatch.csv");
     EXPECT_EQ(rt.set.machine.type, analysis::MachineType::RTTTR);
     ASSERT_EQ(rt.nominal_mismatches.size(), 1u);
     EXPECT_EQ(rt.nominal_mismatches[0].line, 5);
@@ -121,7 +121,7 @@ class InvalidReadingsFile : public ::testing::TestWithParam<Invalid> {};
 TEST_P(InvalidReadingsFile, IsRefusedWithLineAndProblem) {
     const Invalid& c = GetParam();
     try {
-        read_readings_file(kDir + "invalid/" + c.file);
+        read_readings_file(kDirReadingsFile + "invalid/" + c.file);
         FAIL() << c.file << " was accepted";
     } catch (const ReadingsFileError& e) {
         EXPECT_EQ(e.line(), c.line) << e.what();
@@ -164,7 +164,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(ReadingsFile, MissingFileIsLineZero) {
     try {
-        read_readings_file(kDir + "does-not-exist.csv");
+        read_readings_file(kDirReadingsFile + "does-not-exist.csv");
         FAIL();
     } catch (const ReadingsFileError& e) {
         EXPECT_EQ(e.line(), 0);
@@ -176,7 +176,7 @@ TEST(ReadingsFile, ParseWriteParseIsLossless) {
     for (const char* name :
          {"spec_example.csv", "tttrr_full_crlf.csv", "rrttt_minimal.csv", "rtttr_nominal_mismatch.csv"}) {
         SCOPED_TRACE(name);
-        const auto a = read_readings_file(kDir + name);
+        const auto a = read_readings_file(kDirReadingsFile + name);
         const std::string text = format_readings(a.set, a.metadata);
         const auto b = parse_readings(text);
         expect_same(a.set, b.set);
@@ -220,7 +220,7 @@ TEST(ReadingsFile, WriterKeepsArbitraryRadiansExact) {
 }
 
 TEST(ReadingsFile, WritesTheShortestDegreesAndParsesMultiLineQuotedFields) {
-    const auto f = read_readings_file(kDir + "tttrr_full_crlf.csv");
+    const auto f = read_readings_file(kDirReadingsFile + "tttrr_full_crlf.csv");
     const std::string text = format_readings(f.set, f.metadata);
     EXPECT_NE(text.find(",-30,90,"), std::string::npos) << text;
     EXPECT_EQ(text.find("29.99999"), std::string::npos) << text;
@@ -240,7 +240,7 @@ TEST(ReadingsFile, WritesTheShortestDegreesAndParsesMultiLineQuotedFields) {
 TEST(ReadingsFile, ImportIsOneTransactionAndLoadReadingsReturnsIt) {
     test::TempDir dir;
     Store store(dir.file("a.db"));
-    const auto f = read_readings_file(kDir + "tttrr_full_crlf.csv");
+    const auto f = read_readings_file(kDirReadingsFile + "tttrr_full_crlf.csv");
     const auto id = import_readings(store, f, "tttrr_full_crlf.csv");
     const auto info = store.session(id);
     EXPECT_EQ(info.source, SessionSource::imported);

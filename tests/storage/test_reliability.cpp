@@ -199,7 +199,7 @@ void corrupt_and_expect_untouched(const std::string& path, Kind kind) {
     EXPECT_EQ(slurp(path), before) << "the damaged file was modified";
 }
 
-std::string make_db(const TempDir& dir, const std::string& name, int samples) {
+std::string make_db_reliability(const TempDir& dir, const std::string& name, int samples) {
     const auto path = dir.file(name);
     StoreOptions o;
     o.sync_full = false;
@@ -229,7 +229,7 @@ TEST(Reliability, NotADatabaseIsRefusedAndUntouched) {
 
 TEST(Reliability, TruncatedDatabaseIsRefusedAndUntouched) {
     TempDir dir;
-    const auto path = make_db(dir, "t.db", 20000);
+    const auto path = make_db_reliability(dir, "t.db", 20000);
     const auto size = std::filesystem::file_size(path);
     std::filesystem::resize_file(path, size / 2);
     try {
@@ -244,7 +244,7 @@ TEST(Reliability, TruncatedDatabaseIsRefusedAndUntouched) {
 
 TEST(Reliability, DamagedPagesAreReportedAndUntouched) {
     TempDir dir;
-    const auto path = make_db(dir, "d.db", 20000);
+    const auto path = make_db_reliability(dir, "d.db", 20000);
     {
         std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
         const auto size = static_cast<std::streamoff>(std::filesystem::file_size(path));
@@ -258,7 +258,7 @@ TEST(Reliability, DamagedPagesAreReportedAndUntouched) {
 
 TEST(Reliability, NewerSchemaIsRefusedAndUntouched) {
     TempDir dir;
-    const auto path = make_db(dir, "new.db", 10);
+    const auto path = make_db_reliability(dir, "new.db", 10);
     {
         Database db(path);
         db.exec("PRAGMA user_version = 99");

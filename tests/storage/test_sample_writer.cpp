@@ -20,7 +20,7 @@ std::int64_t running_session(Store& store) {
     return id;
 }
 
-analysis::BarSample at_us(std::uint64_t t, std::int32_t nm = 0) {
+analysis::BarSample at_us_sample_writer(std::uint64_t t, std::int32_t nm = 0) {
     analysis::BarSample s;
     s.device_time_us = t;
     s.displacement_nm = nm;
@@ -33,10 +33,10 @@ TEST(SampleWriter, CommitsWhenABatchSpans50msOfDeviceTime) {
     const auto id = running_session(store);
     SampleWriter w(store, id, {50'000, 65'536, std::chrono::hours(1)});
     // 1 kHz: samples 0..49 span 49 ms and stay pending; sample 50 (at 50 ms) completes the batch.
-    for (std::uint64_t i = 0; i < 50; ++i) w.append(at_us(i * 1000));
+    for (std::uint64_t i = 0; i < 50; ++i) w.append(at_us_sample_writer(i * 1000));
     EXPECT_EQ(w.pending(), 50u);
     EXPECT_EQ(store.sample_count(id), 0);
-    w.append(at_us(50'000));
+    w.append(at_us_sample_writer(50'000));
     EXPECT_EQ(w.pending(), 0u);
     EXPECT_EQ(store.sample_count(id), 51);
     EXPECT_EQ(w.committed(), 51u);
@@ -48,11 +48,11 @@ TEST(SampleWriter, ASlowTrickleIsCommittedAfter50msOfWallTime) {
     Store store(dir.file("a.db"));
     const auto id = running_session(store);
     SampleWriter w(store, id);  // defaults: 50 ms of device time or 50 ms of waiting
-    w.append(at_us(0));
-    w.append(at_us(1000));
+    w.append(at_us_sample_writer(0));
+    w.append(at_us_sample_writer(1000));
     EXPECT_EQ(store.sample_count(id), 0);
     std::this_thread::sleep_for(std::chrono::milliseconds(60));  // the link stalls
-    w.append(at_us(2000));
+    w.append(at_us_sample_writer(2000));
     EXPECT_EQ(store.sample_count(id), 3) << "the batch's first sample waited 60 ms: committed";
 }
 
@@ -61,12 +61,12 @@ TEST(SampleWriter, CommitsByCountAndRestartedDeviceClock) {
     Store store(dir.file("a.db"));
     const auto id = running_session(store);
     SampleWriter w(store, id, {100'000, 50});
-    for (int i = 0; i < 49; ++i) w.append(at_us(5));
+    for (int i = 0; i < 49; ++i) w.append(at_us_sample_writer(5));
     EXPECT_EQ(store.sample_count(id), 0);
-    w.append(at_us(5));
+    w.append(at_us_sample_writer(5));
     EXPECT_EQ(store.sample_count(id), 50);
-    w.append(at_us(1000));
-    w.append(at_us(10));  // clock went backwards: commit
+    w.append(at_us_sample_writer(1000));
+    w.append(at_us_sample_writer(10));  // clock went backwards: commit
     EXPECT_EQ(store.sample_count(id), 52);
 }
 

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "../scratch_dir.hpp"
 #include "ballbar/acquisition/circle_program.hpp"
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/pipe.hpp"
@@ -25,15 +26,6 @@ namespace acq = ballbar::acquisition;
 namespace circ = ballbar::analysis::circular;
 namespace fs = std::filesystem;
 
-struct Dir {
-    fs::path path;
-    Dir() {
-        char tmpl[] = "/tmp/ballbar-circular-wf-XXXXXX";
-        path = ::mkdtemp(tmpl);
-    }
-    ~Dir() { fs::remove_all(path); }
-};
-
 /// An XY test of R 100 mm at 1000 mm/min, both directions, feed-in 0.8 mm (the bar's ±1 mm range).
 circ::TestSpec xy_test() {
     return storage::parse_test_json(
@@ -44,7 +36,7 @@ circ::TestSpec xy_test() {
 
 /// The emulated machine with 3 µm of X backlash and 25 µm/m of XY squareness, standing at the test's
 /// start (R + feed-in on +X), running the program at `program` when told to start.
-fs::path emulator_config(const Dir& d, const fs::path& program) {
+fs::path emulator_config(const ballbar::test::ScratchDir& d, const fs::path& program) {
     const fs::path p = d.path / "emulator.json";
     std::ofstream(p)
         << R"({"time": "simulated", "seed": 5, "instrument": {"calibrated_length_mm": 100, "noise_um": 0.15},
@@ -86,7 +78,7 @@ class ProgramOperator : public acq::Operator {
     int stop_after_;
 };
 
-CircularMeasureOptions simulated(const fs::path& config) {
+CircularMeasureOptions simulated_circular_measure(const fs::path& config) {
     CircularMeasureOptions o;
     o.device_uri = "emulator:" + config.string();
     o.open_transport = [config] {
@@ -106,13 +98,13 @@ double diagnostic(const std::string& payload, const std::string& key) {
 }
 
 TEST(CircularMeasureUseCase, ANewSessionIsMeasuredAnalysedAndStored) {
-    Dir d;
+    ballbar::test::ScratchDir d{"circular-wf"};
     storage::Store store((d.path / "c.db").string());
     const fs::path program = d.path / "circle.nc";
     PreparedCircular p;
     p.test = xy_test();
     ProgramOperator op(program, acq::circular_program(p.test, p.dialect, p.dwell_s));
-    CircularMeasureOptions o = simulated(emulator_config(d, program));
+    CircularMeasureOptions o = simulated_circular_measure(emulator_config(d, program));
     std::optional<std::int64_t> created;
     o.on_session_created = [&created](std::int64_t id, const circ::TestSpec&) { created = id; };
     const CircularMeasureResult r = measure_circular(store, p, op, o);
@@ -139,14 +131,14 @@ TEST(CircularMeasureUseCase, ANewSessionIsMeasuredAnalysedAndStored) {
 }
 
 TEST(CircularMeasureUseCase, AStoppedRunIsTakenUpAndCompleted) {
-    Dir d;
+    ballbar::test::ScratchDir d{"circular-wf"};
     storage::Store store((d.path / "c.db").string());
     const fs::path program = d.path / "circle.nc";
     PreparedCircular p;
     p.test = xy_test();
     std::atomic<bool> stop{false};
     ProgramOperator op(program, acq::circular_program(p.test, p.dialect, p.dwell_s), &stop, 1);
-    CircularMeasureOptions o = simulated(emulator_config(d, program));
+    CircularMeasureOptions o = simulated_circular_measure(emulator_config(d, program));
     o.stop = &stop;
     const CircularMeasureResult first = measure_circular(store, p, op, o);
     ASSERT_TRUE(first.summary.interrupted) << first.summary.reason;
@@ -169,7 +161,8 @@ TEST(CircularMeasureUseCase, AStoppedRunIsTakenUpAndCompleted) {
     EXPECT_EQ(again.test.radius_mm, 100.0) << "the stored test";
     EXPECT_GE(again.first_attempt, 1);
     ProgramOperator op2(program, acq::circular_program(again.test, again.dialect, again.dwell_s));
-    const CircularMeasureResult second = measure_circular(store, again, op2, simulated(d.path / "emulator.json"));
+    const CircularMeasureResult second =
+        measure_circular(store, again, op2, simulated_circular_measure(d.path / "emulator.json"));
     ASSERT_EQ(second.summary.final_state, acq::State::Done) << second.summary.reason;
     EXPECT_EQ(second.session_id, id) << "the same session";
     EXPECT_EQ(store.session(id).state, storage::SessionState::completed);
@@ -178,7 +171,7 @@ TEST(CircularMeasureUseCase, AStoppedRunIsTakenUpAndCompleted) {
 }
 
 TEST(CircularMeasureUseCase, OnlyACircularSessionThatExistsIsTakenUp) {
-    Dir d;
+    ballbar::test::ScratchDir d{"circular-wf"};
     storage::Store store((d.path / "c.db").string());
     try {
         (void)resume_circular_session(store, "42");

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../scratch_dir.hpp"
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
 #include "ballbar/workflow/error.hpp"
@@ -67,23 +68,10 @@ std::string readings_file(double x0c_mm, double y0c_mm, const std::string& name 
     return f.str();
 }
 
-struct Dir {
-    std::filesystem::path path;
-    Dir() {
-        char tmpl[] = "/tmp/ballbar-identify-XXXXXX";
-        path = ::mkdtemp(tmpl);
-    }
-    ~Dir() { std::filesystem::remove_all(path); }
-    std::string write(const std::string& name, const std::string& text) const {
-        std::ofstream(path / name) << text;
-        return (path / name).string();
-    }
-};
-
 const std::vector<analysis::Param> kParams{analysis::Param::X0C, analysis::Param::Y0C, analysis::Param::C_zero};
 
 TEST(IdentifyUseCase, AReadingsFileGivesTheCAxisLocationAndNothingIsStoredWithoutAskingForIt) {
-    Dir d;
+    ballbar::test::ScratchDir d{"identify"};
     const std::vector<std::string> in{d.write("r.csv", readings_file(0.03, -0.02))};
     const ReadingInputs inputs = read_inputs(in, []() -> storage::Store& { throw std::logic_error("no session"); });
     ASSERT_EQ(inputs.sets.size(), 1u);
@@ -106,7 +94,7 @@ TEST(IdentifyUseCase, AReadingsFileGivesTheCAxisLocationAndNothingIsStoredWithou
 }
 
 TEST(IdentifyUseCase, SessionsGetTheModelsNextVersionAndEachAResult) {
-    Dir d;
+    ballbar::test::ScratchDir d{"identify"};
     storage::Store store((d.path / "db").string());
     const std::int64_t a = storage::import_readings(store, storage::parse_readings(readings_file(0.03, -0.02, "m7")));
     const std::int64_t b = storage::import_readings(store, storage::parse_readings(readings_file(0.03, -0.02, "m7")));
@@ -134,7 +122,7 @@ TEST(IdentifyUseCase, SessionsGetTheModelsNextVersionAndEachAResult) {
 }
 
 TEST(IdentifyUseCase, InputsThatCannotBeUsedAreRefusedInTheirCategory) {
-    Dir d;
+    ballbar::test::ScratchDir d{"identify"};
     storage::Store store((d.path / "db").string());
     const StoreOpener opener = [&store]() -> storage::Store& { return store; };
     auto category = [&](const std::vector<std::string>& in) {

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "../scratch_dir.hpp"
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/analysis/nc_program.hpp"
@@ -31,13 +32,9 @@ std::string slurp(const fs::path& p) {
     return ss.str();
 }
 
-struct Dir {
-    fs::path path;
-    Dir() {
-        char tmpl[] = "/tmp/ballbar-measure-wf-XXXXXX";
-        path = ::mkdtemp(tmpl);
-    }
-    ~Dir() { fs::remove_all(path); }
+/// A scratch directory that also writes the emulator's configuration.
+struct Dir : ballbar::test::ScratchDir {
+    Dir() : ScratchDir("measure-wf") {}
     /// An `emulator:` URI whose machine runs the program written to `program` (at each cycle start).
     std::string device(const fs::path& program) const { return "emulator:" + config(program).string(); }
     fs::path config(const fs::path& program) const {
