@@ -4,15 +4,12 @@
 // lands where the program meant it relative to the table (compensate.hpp). MODEL is a
 // `ballbar-model/1` JSON file (what `ballbar identify` stores), a model id in the database, or a model
 // name (its latest version). Reports the largest correction and the blocks near a singularity.
-#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -20,11 +17,7 @@
 #include "ballbar/analysis/compensate.hpp"
 #include "ballbar/analysis/limits.hpp"
 #include "ballbar/analysis/nc_compensate.hpp"
-#include "ballbar/analysis/nc_program.hpp"
-#include "ballbar/storage/machine_json.hpp"
-#include "ballbar/storage/model_codec.hpp"
-#include "ballbar/storage/offsets_codec.hpp"
-#include "ballbar/storage/store.hpp"
+#include "ballbar/workflow/compensate.hpp"
 #include "command.hpp"
 #include "files.hpp"
 
@@ -32,7 +25,6 @@ namespace ballbar::app {
 namespace {
 
 namespace ba = ballbar::analysis;
-namespace bs = ballbar::storage;
 using nlohmann::json;
 
 struct CompensateArgs {
@@ -56,60 +48,6 @@ struct CompensateArgs {
     bool json = false;
     double singular_deg = ba::kDefaultSingularDeg;
 };
-
-struct Model {
-    bs::ErrorModel stored;
-    ba::ErrorParams params{};
-    std::string source;
-};
-
-Model parse_model(const std::string& text, const std::string& source) {
-    Model m;
-    m.source = source;
-    try {
-        m.stored = bs::model_from_json(text);
-    } catch (const bs::FormatError& e) {
-        throw Error(ErrorCategory::bad_input, source + ": " + e.what());
-    }
-    m.params = m.stored.values();
-    return m;
-}
-
-Model load_model(const std::string& spec, const Globals& globals) {
-    std::error_code ec;
-    // Anything at that path is a file to read (fileio says when it is a directory or a FIFO).
-    if (std::filesystem::exists(std::filesystem::symlink_status(spec, ec)))
-        return parse_model(read_file(spec, "model"), spec);
-    const std::string db = resolve_db_path(globals);
-    if (!std::filesystem::exists(db, ec))  // a model id or name is looked up in an existing database only
-        throw Error(ErrorCategory::bad_input, "model '" + spec + "': no such file, and no database at " + db +
-                                                  " for a model id or name" +
-                                                  (globals.db_path.empty() ? "" : " (check --db)"));
-    bs::Store store(db);
-    const bool numeric =
-        !spec.empty() && std::all_of(spec.begin(), spec.end(), [](char c) { return c >= '0' && c <= '9'; });
-    try {
-        if (numeric) {
-            const bs::ModelRecord r = store.model(std::stoll(spec));
-            return parse_model(r.params_json, "model " + spec);
-        }
-        if (const auto r = store.latest_model(spec))
-            return parse_model(r->params_json, "model " + r->name + " v" + std::to_string(r->version));
-    } catch (const bs::StorageError& e) {
-        throw Error(ErrorCategory::bad_input, e.what());  // "no model 99", said once
-    }
-    throw Error(ErrorCategory::bad_input, "model '" + spec + "': no such file, model id or model name");
-}
-
-ba::NcDialect pick_dialect(const CompensateArgs& args) {
-    if (!args.dialect.empty()) {
-        const auto d = ba::parse_nc_dialect(args.dialect);
-        if (!d) throw Error(ErrorCategory::bad_input, "--dialect: '" + args.dialect + "' (fanuc or linuxcnc)");
-        return *d;
-    }
-    const std::string ext = std::filesystem::path(args.program).extension().string();
-    return ext == ".ngc" ? ba::NcDialect::LinuxCNC : ba::NcDialect::Fanuc;
-}
 
 /// Where the compensated program goes: fileio::OutputFile ("-" or /dev/stdout: standard output, and
 /// the summary goes to stderr; a regular file is written beside it and renamed over it only by
@@ -142,15 +80,6 @@ class OutputFile {
     fileio::OutputFile file_;
 };
 
-/// The work-offset and tool table (docs/compensation.md, "The offsets table"), read by its codec.
-ba::NcOffsetTable parse_offsets(const std::string& text, const std::string& source) {
-    try {
-        return bs::offsets_from_json(text);
-    } catch (const bs::FormatError& e) {
-        throw Error(ErrorCategory::bad_input, source + ": " + e.what());
-    }
-}
-
 std::vector<std::string> split_codes(const std::string& list) {
     std::vector<std::string> out;
     std::string cur;
@@ -181,51 +110,35 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     }
     if (!(args.chord_tolerance_mm > 0)) throw Error(ErrorCategory::bad_input, "--chord-tolerance must be positive");
 
-    const Model model = load_model(args.model, globals);
-    const ba::NcDialect dialect = pick_dialect(args);
+    const workflow::ModelChoice model =
+        workflow::find_model(args.model, resolve_db_path(globals), globals.db_path.empty() ? "" : " (check --db)");
+    workflow::ProgramCompensation pc;
+    pc.dialect = args.dialect;
+    pc.controller = args.controller;
+    pc.tcp_on = split_codes(args.tcp_on);
+    pc.tcp_off = split_codes(args.tcp_off);
+    if (!args.offsets.empty()) {
+        pc.offsets_json = read_file(args.offsets, "offsets table");
+        pc.offsets_source = args.offsets;
+    }
+    pc.interpreter.tcp_at_start = args.tcp;
+    pc.interpreter.iso_directions = args.iso_directions;
+    pc.interpreter.chord_tolerance_mm = args.chord_tolerance_mm;
+    pc.options.exact = args.exact;
+    pc.options.solver.singular_tolerance = std::sin(ba::deg_to_rad(args.singular_deg));
+    pc.options.max_linear_mm = args.max_correction_mm;
+    pc.options.max_rotary_rad = ba::deg_to_rad(args.max_correction_deg);
+    pc.options.force = args.force;
+    pc.options.decimals = args.decimals;
+    pc.options.solver.max_iterations = args.max_iterations;
+    pc.options.allow_truncated = args.allow_truncated;
+    workflow::program_dialect(pc, args.program);  // a wrong --dialect is said before the program is read
     const std::string text = read_program_file(args.program, "program");
 
-    ba::NcInterpreterOptions io;
-    io.dialect = dialect;
-    if (!args.offsets.empty()) {
-        io.offsets = parse_offsets(read_file(args.offsets, "offsets table"), args.offsets);
-        io.have_offsets = true;
-    }
-    const std::string controller =
-        !args.controller.empty() ? args.controller : (dialect == ba::NcDialect::LinuxCNC ? "linuxcnc" : "fanuc");
-    const auto codes = ba::tcp_codes_for(controller);
-    if (!codes)
-        throw Error(ErrorCategory::bad_input,
-                    "--controller: '" + controller + "' (linuxcnc, fanuc, siemens, heidenhain, none)");
-    io.tcp = *codes;
-    if (!args.tcp_on.empty()) io.tcp.on = split_codes(args.tcp_on);
-    if (!args.tcp_off.empty()) io.tcp.off = split_codes(args.tcp_off);
-    io.tcp_at_start = args.tcp;
-    io.iso_directions = args.iso_directions;
-    io.chord_tolerance_mm = args.chord_tolerance_mm;
-
-    ba::NcCompensateOptions co;
-    co.exact = args.exact;
-    co.solver.singular_tolerance = std::sin(ba::deg_to_rad(args.singular_deg));
-    co.max_linear_mm = args.max_correction_mm;
-    co.max_rotary_rad = ba::deg_to_rad(args.max_correction_deg);
-    co.force = args.force;
-    co.decimals = args.decimals;
-    co.solver.max_iterations = args.max_iterations;
-    co.allow_truncated = args.allow_truncated;
-    co.empirical = model.stored.empirical;  // terms learned by discover (angular tables, positioning errors)
-    co.title = "compensated by ballbar with " + model.source;
-
     OutputFile out(args.out, inputs);
-    ba::NcCompensateSummary s;
-    try {
-        s = ba::compensate_nc_program(text, model.stored.machine, model.params, io, co,
-                                      [&](std::string_view chunk) { out.write(chunk); });
-    } catch (const ba::NcError& e) {
-        throw Error(ErrorCategory::bad_input, args.program + ": " + e.what());  // `out` removes its .part
-    } catch (const ba::AnalysisError& e) {
-        throw Error(ErrorCategory::bad_input, args.program + ": " + e.what());
-    }
+    // On an error `out` removes its .part: OUT stays as it was.
+    const ba::NcCompensateSummary s =
+        workflow::compensate_program(model, text, args.program, pc, [&](std::string_view chunk) { out.write(chunk); });
     const bool failed = s.not_converged > 0 && !args.force;
     if (!failed) out.commit();
     std::ostream& report = out.is_stdout() ? std::cerr : std::cout;  // the program has stdout

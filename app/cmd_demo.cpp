@@ -18,23 +18,17 @@
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/acquisition/session.hpp"
+#include "ballbar/report/build.hpp"
 #include "ballbar/storage/compensation_codec.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
 #include "ballbar/workflow/ssm_demo.hpp"
 #include "circle_measure.hpp"  // demo --test circular
 #include "command.hpp"
+#include "compensation_demo.hpp"
 #include "figures.hpp"
 #include "files.hpp"
 #include "gauge_commands.hpp"  // demo --instrument: a digital gauge (issue 14)
 #include "json_out.hpp"
-#if __has_include("ballbar/report/build.hpp")
-#include "ballbar/report/build.hpp"
-#define BALLBAR_HAVE_REPORT 1
-#endif
-#if __has_include("compensation_demo.hpp")
-#include "compensation_demo.hpp"
-#define BALLBAR_HAVE_COMPENSATION_DEMO 1
-#endif
 
 namespace ballbar::app {
 namespace {
@@ -217,45 +211,26 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
 
     int code = kExitOk;
     std::string compensation_text;  // printed after the session's tables
-#ifdef BALLBAR_HAVE_COMPENSATION_DEMO
     if (o.compensate) {
-        CompensationDemoOptions co;
+        workflow::CompensationDemoOptions co;
         co.seed = o.seed;
-        CompensationDemoResult cr;
-        std::ostringstream ss;
-        code = run_compensation_demo(co, ss, o.json, &cr);
+        const workflow::CompensationDemo cd = workflow::run_compensation_demo(co);
         if (o.json) {
-            out["compensation"] = ojson::parse(ss.str());
+            out["compensation"] = compensation_demo_json(cd, co);
             // Issue 6's figures at the top level too: the improvement, the RMS before and after, the estimates.
             for (const char* key : {"improvement_ratio", "rms_before_um", "rms_after_um", "identified"})
                 out[key] = out["compensation"][key];
         } else {
-            compensation_text = ss.str();
+            compensation_text = compensation_demo_text(cd, co.noise_um);
         }
-        // Stored with the demo session, so its report shows the before/after (report/ reads kind
-        // "compensation") -- only with a TTTRR session: the proof runs on an emulated TTTRR machine.
-        if (*type == ba::MachineType::TTTRR) {
-            storage::CompensationRecord stored;
-            stored.metric = "RMS tool-ball error over a " + std::to_string(cr.path_blocks) +
-                            "-block test path, before and after " + (cr.exact ? "exact" : "first-order") +
-                            " compensation (compensation demo: its own emulated TTTRR machine, seed " +
-                            std::to_string(o.seed) + ")";
-            for (int a = 0; a < 3; ++a)
-                stored.axes.push_back({std::string(1, "XYZ"[a]), cr.before_um[a], cr.after_um[a]});
-            store.add_result(id, std::string(storage::kCompensationResultKind), storage::compensation_to_json(stored),
-                             std::nullopt, "ballbar demo/1");
-        }
+        if (!cd.fit.converged) code = kExitFailure;
+        // Stored with the demo session, so its report shows the before/after -- only with a TTTRR
+        // session: the proof runs on an emulated TTTRR machine.
+        if (*type == ba::MachineType::TTTRR) workflow::store_compensation_demo(store, id, cd, o.seed);
     }
-#else
-    if (o.compensate) throw Error(ErrorCategory::failed, "--compensate: this build has no compensation demo");
-#endif
     if (!o.report.empty()) {
-#ifdef BALLBAR_HAVE_REPORT
         write_output(o.report, "--report", report::render_pdf_bytes(report::build_report(store, id)), inputs);
         out["report"] = o.report;
-#else
-        throw Error(ErrorCategory::failed, "--report: this build has no report module");
-#endif
     }
     if (o.json) {
         std::cout << out.dump() << std::endl;

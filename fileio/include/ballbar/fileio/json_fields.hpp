@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 // The helper of the strict readers of JSON documents: each field is checked for its type and range, an
-// unknown key is refused, and every error names the key. The stored model, the procedure's results and
-// identify's result read through it; the offsets table, the trace header, the emulator configuration,
-// the machine and plan files and `solve` still have their own small checks (issue 25, item 3). A reader
+// unknown key is refused, and every error names the key. The stored model, the procedure's results,
+// identify's and compensate's results and the `solve` requests read through it; the offsets table, the
+// trace header, the emulator configuration and the machine and plan files still have their own small
+// checks (issue 25, item 3). A reader
 // gives its own `fail`, which throws its own error type with its own prefix; the checks are these.
 // Works on any nlohmann::basic_json (json, ordered_json).
 #pragma once
@@ -45,6 +46,11 @@ class JsonFields {
         }
     }
     bool has(const char* key) const { return j_.contains(key); }
+    /// The value of an optional key: nullptr when it is absent or null.
+    const Json* optional(const char* key) const {
+        const auto it = j_.find(key);
+        return it == j_.end() || it->is_null() ? nullptr : &*it;
+    }
     /// The value of a key that must be there.
     const Json& at(const char* key) const {
         const auto it = j_.find(key);
