@@ -5,11 +5,9 @@
 #include <filesystem>
 #include <iostream>
 
-#include "ballbar/storage/readings.hpp"
-#include "ballbar/storage/readings_file.hpp"
 #include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
-#include "ballbar/storage/trace_file.hpp"
+#include "ballbar/workflow/import_export.hpp"
 #include "command.hpp"
 #include "files.hpp"
 
@@ -33,24 +31,11 @@ int run_export(const ExportOptions& o, const Globals& globals) {
         storage::Store store(existing_db_path(globals), so);  // a reader never creates one
         note_database_damage(store.damage());
         const auto id = store.find_session(o.session);
-        if (o.format == "readings") {
-            const auto info = store.session(id);
-            const auto set = storage::load_readings(store, id);
-            if (set.readings.empty())
-                throw Error(ErrorCategory::failed, "session " + std::to_string(id) + " has no points");
-            write_text(o.out, storage::format_readings(set, storage::readings_metadata(info)));
-        } else if (o.format == "trace") {
-            std::string text;
-            try {
-                text = storage::format_trace(storage::load_trace(store, id));
-            } catch (const storage::StorageError&) {
-                throw;
-            } catch (const std::runtime_error& e) {
-                throw Error(ErrorCategory::failed, e.what());
-            }
-            write_text(o.out, text);
-        } else if (o.format == "json") {
-            write_text(o.out, storage::session_json(store, id) + "\n");
+        if (o.format != "csv") {
+            const auto format = o.format == "readings" ? workflow::ExportFormat::readings
+                                : o.format == "trace"  ? workflow::ExportFormat::trace
+                                                       : workflow::ExportFormat::json;
+            write_text(o.out, workflow::export_session(store, id, format));
         } else {
             if (o.out == "-")
                 throw Error(ErrorCategory::bad_input, "--format csv writes two files: give --out DIRECTORY");
