@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "ballbar/storage/circular_result.hpp"
+#include "ballbar/workflow/circular_test.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -18,29 +19,6 @@ std::string fmt(double v, int decimals = 2) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
     return buf;
-}
-
-struct AxisFigures {
-    char axis = 'x';
-    int index = 0;
-    std::optional<double> backlash_um, scale_ppm;
-};
-
-/// Backlash and scale of the plane's two axes. Scale: the mismatch (s_p − s_q) and the mean radius
-/// offset (s_p + s_q)/2 · R (the bar's length is absolute) give each axis's own scale error.
-std::array<AxisFigures, 2> axis_figures(const circ::CircularResult& r) {
-    const auto letters = circ::plane_axes(r.test.plane);
-    const auto idx = circ::plane_axis_index(r.test.plane);
-    std::array<AxisFigures, 2> out{};
-    out[0].axis = letters[0], out[0].index = idx[0], out[1].axis = letters[1], out[1].index = idx[1];
-    if (const auto* b = r.find(circ::Diag::BacklashP)) out[0].backlash_um = b->value;
-    if (const auto* b = r.find(circ::Diag::BacklashQ)) out[1].backlash_um = b->value;
-    if (const auto* m = r.find(circ::Diag::ScaleMismatch)) {
-        const double mean_ppm = r.mean_radius_um * 1e3 / r.test.radius_mm;
-        out[0].scale_ppm = mean_ppm + 0.5 * m->value;
-        out[1].scale_ppm = mean_ppm - 0.5 * m->value;
-    }
-    return out;
 }
 
 }  // namespace
@@ -114,49 +92,22 @@ void print_volumetric(std::ostream& os, const circ::VolumetricResult& v) {
 }
 
 ojson controller_json(const circ::CircularResult& r, const std::string& controller) {
+    const workflow::ControllerSettings cs = workflow::controller_settings(r, controller);
     ojson j = {{"controller", controller}};
     ojson axes = ojson::object();
-    // grblHAL: axis settings are numbered 100 + 10·kind + axis (X 0, Y 1, Z 2); kind 0 steps/mm,
-    // kind 6 backlash (mm, only in a build with ENABLE_BACKLASH_COMPENSATION).
-    const char* smoothie_actuator[3] = {"alpha", "beta", "gamma"};
-    for (const auto& a : axis_figures(r)) {
+    for (const auto& a : cs.axes) {
         ojson e = ojson::object();
-        const std::string axis(1, static_cast<char>(a.axis - 'a' + 'A'));
-        const std::string index = std::to_string(a.index);
-        if (a.backlash_um) {
-            const double mm = std::max(*a.backlash_um, 0.0) * 1e-3;
-            e["backlash_mm"] = mm;
-            if (*a.backlash_um < 0.0) e["note"] = "negative lost motion (the axis overshoots): not compensable, set 0";
-            if (controller == "linuxcnc") {
-                e["setting"] = "[JOINT_" + index + "] BACKLASH = " + fmt(mm, 4);
-            } else if (controller == "grblhal") {
-                e["setting"] = "$16" + index + "=" + fmt(mm, 3);
-            } else if (controller == "smoothieware") {
-                e["setting"] = "M425 " + axis + fmt(mm, 4) + " P1";
-                e["config"] = "[actuator] " + std::string(smoothie_actuator[a.index]) + ".backlash_mm = " + fmt(mm, 4);
-            } else {
-                e["setting"] = "M425 " + axis + fmt(mm, 4) + " F1";  // F1: full correction (Marlin's default is 0)
-            }
-        }
-        if (a.scale_ppm) {
-            const double factor = 1.0 / (1.0 + *a.scale_ppm * 1e-6);
-            e["scale_ppm"] = *a.scale_ppm;
-            e["steps_per_mm_factor"] = factor;
-            if (controller == "linuxcnc")
-                e["scale_setting"] = "[JOINT_" + index + "] SCALE = current SCALE × " + fmt(factor, 7);
-            else if (controller == "grblhal")
-                e["scale_setting"] = "$10" + index + " = current × " + fmt(factor, 7);
-            else if (controller == "smoothieware")
-                e["scale_setting"] = "[actuator] " + std::string(smoothie_actuator[a.index]) +
-                                     ".steps_per_mm = current × " + fmt(factor, 7);
-            else
-                e["scale_setting"] = "M92 " + axis + "<current steps/mm × " + fmt(factor, 7) + ">";
-        }
-        axes[axis] = e;
+        if (a.backlash_mm) e["backlash_mm"] = *a.backlash_mm;
+        if (!a.note.empty()) e["note"] = a.note;
+        if (!a.setting.empty()) e["setting"] = a.setting;
+        if (!a.config.empty()) e["config"] = a.config;
+        if (a.scale_ppm) e["scale_ppm"] = *a.scale_ppm;
+        if (a.steps_per_mm_factor) e["steps_per_mm_factor"] = *a.steps_per_mm_factor;
+        if (!a.scale_setting.empty()) e["scale_setting"] = a.scale_setting;
+        axes[std::string(1, a.axis)] = e;
     }
     j["axes"] = axes;
-    if (controller == "smoothieware")
-        j["config"] = "[motion control] backlash_enable = true";  // SmoothieV2: on at every boot
+    if (!cs.config.empty()) j["config"] = cs.config;
     return j;
 }
 

@@ -3,20 +3,16 @@
 //   plan     writes the part program of a circular test (Fanuc or LinuxCNC) and its test header
 //   analyze  G, G(b), F and the diagnostics of a ballbar-trace/1 file or a stored circular session;
 //            --controller prints the measured backlash (and scale) in a controller's own terms
-#include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "ballbar/acquisition/circle_program.hpp"
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/analysis/circular.hpp"
-#include "ballbar/analysis/limits.hpp"
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/storage/trace_file.hpp"
+#include "ballbar/workflow/circular_test.hpp"
 #include "circle_measure.hpp"
 #include "circle_output.hpp"
 #include "circle_test_options.hpp"
@@ -39,67 +35,9 @@ struct PlanOptions {
     bool store = false;
 };
 
-/// Numbers in messages as the part program writes them (4 decimals, trailing zeros dropped).
-std::string num_text(double v) {
-    return acquisition::nc_number(v);
-}
-
-/// --rate: refuses a feed whose samples lie too far apart along the path for the diagnosis
-/// (circ::sampling_limit), naming the highest usable feed.
-void check_feed_for_rate(const circ::TestSpec& t, std::optional<double> rate) {
-    if (!rate) return;
-    const double rate_hz = *rate;
-    if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
-        throw Error(ErrorCategory::bad_input, "--rate must be a reading rate > 0, readings/s");
-    const circ::SamplingLimit lim = circ::sampling_limit(t, rate_hz);
-    const double spacing_mm = t.feed_mm_min / (60.0 * rate_hz);
-    const std::string need = std::string(lim.binding) == "feed-in"
-                                 ? "three samples on the " + num_text(t.feed_in_mm) + " mm feed-in"
-                                 : "two samples per " + num_text(analysis::circular::AnalysisOptions{}.min_pitch_mm) +
-                                       " mm cyclic-error pitch";
-    const double highest = std::floor(lim.max_feed_mm_min + 1e-6);
-    if (spacing_mm <= lim.max_spacing_mm * (1.0 + 1e-9)) {
-        std::cerr << "ballbar: at " << num_text(rate_hz) << " readings/s the samples lie " << num_text(spacing_mm)
-                  << " mm apart along the path (at most " << num_text(lim.max_spacing_mm) << " mm: " << need
-                  << "); the highest usable feed is " << num_text(highest) << " mm/min\n";
-        return;
-    }
-    throw Error(ErrorCategory::bad_input,
-                "--feed " + num_text(t.feed_mm_min) + " mm/min is too fast for " + num_text(rate_hz) +
-                    " readings/s: the samples would lie " + num_text(spacing_mm) +
-                    " mm apart along the path, and the diagnosis needs at most " + num_text(lim.max_spacing_mm) +
-                    " mm (" + need + "); the highest usable feed is " + num_text(highest) + " mm/min (--feed " +
-                    num_text(highest) + ")");
-}
-
-/// The part program of trace.md's "The motion", run by run, arcs split into ≤ 90° blocks.
-std::string circle_program(const circ::TestSpec& t, analysis::NcDialect dialect, double dwell_s,
-                           const acquisition::MachineFile* machine) {
-    const auto ax = circ::plane_axis_index(t.plane);
-    const char* letters = "XYZ";
-    // Travel: every point of the path lies within radius R + feed-in of the centre.
-    if (machine) {
-        for (int i = 0; i < 3; ++i) {
-            const auto& range = machine->range(static_cast<acquisition::Axis>(i));
-            double lo = t.centre_mm[static_cast<std::size_t>(i)], hi = lo;
-            if (i == ax[0] || i == ax[1]) lo -= t.radius_mm + t.feed_in_mm, hi += t.radius_mm + t.feed_in_mm;
-            if (lo < range.min || hi > range.max)
-                throw Error(ErrorCategory::bad_input, std::string("the test leaves the travel of ") + letters[i] +
-                                                          ": it needs " + num_text(lo) + " .. " + num_text(hi) +
-                                                          " mm, the machine has " + num_text(range.min) + " .. " +
-                                                          num_text(range.max) + " mm");
-        }
-    }
-    try {
-        return acquisition::circular_program(t, dialect, dwell_s);
-    } catch (const acquisition::PlanError& e) {
-        throw Error(ErrorCategory::bad_input, e.what());
-    }
-}
-
 int run_plan(const PlanOptions& o, const Globals& globals) {
     const circ::TestSpec t = circle_test(o.test);
-    check_feed_for_rate(t, o.rate_hz);
+    if (o.rate_hz) std::cerr << "ballbar: " << workflow::check_feed_for_rate(t, *o.rate_hz) << '\n';
     std::optional<acquisition::MachineFile> machine;
     if (!o.machine_file.empty()) {
         try {
@@ -126,26 +64,16 @@ int run_plan(const PlanOptions& o, const Globals& globals) {
     } catch (const fileio::FileError& e) {
         throw as_error(e);
     }
-    write_output(o.out, "--out", circle_program(t, dialect, o.dwell_s, machine ? &*machine : nullptr), inputs);
+    write_output(o.out, "--out", workflow::circular_part_program(t, dialect, o.dwell_s, machine ? &*machine : nullptr),
+                 inputs);
     if (o.out != "-") inputs.push_back({o.out, "program just written (--out)"});
     const std::string header = storage::test_json(t);
     if (!o.test_out.empty()) write_output(o.test_out, "--test-out", header + "\n", inputs);
     std::cerr << "ballbar: test header: " << header << '\n';
     if (o.store) {
-        // A planned circular session: the test header it implies, waiting for its samples.
         try {
             storage::Store store(resolve_db_path(globals));
-            storage::NewSession ns;
-            ns.machine.name = "circular test";
-            ns.procedure = "circular";
-            ns.notes = "planned by circle plan";
-            const nlohmann::ordered_json meta = {{"format", "ballbar-trace/1"},
-                                                 {"test", nlohmann::ordered_json::parse(header)},
-                                                 {"reference_length_mm", t.radius_mm + 0.5 * t.feed_in_mm},
-                                                 {"has_bar_temp", false},
-                                                 {"planned", true}};
-            ns.metadata_json = meta.dump();
-            const auto id = store.create_session(ns);
+            const auto id = workflow::store_planned_circular(store, t);
             std::cerr << "ballbar: planned session " << id << " (" << store.session(id).uuid << ")\n";
         } catch (const storage::StorageError& e) {
             throw as_error(e);
@@ -162,102 +90,62 @@ struct AnalyzeOptions {
     std::string controller;
 };
 
-struct Loaded {
-    storage::TraceFile trace;
-    std::optional<std::int64_t> session;
-    std::string name;
-};
-
-Loaded load_input(const std::string& input, const Globals& globals, bool store_file) {
-    Loaded l;
-    l.name = input;
-    std::error_code ec;
-    if (std::filesystem::exists(std::filesystem::symlink_status(input, ec))) {  // a path: fileio says what it is
-        try {
-            l.trace = storage::read_trace_file(input);
-        } catch (const storage::TraceFileError& e) {
-            throw Error(ErrorCategory::bad_input, input + ": " + e.what());
-        }
-        for (const auto& w : l.trace.warnings) std::cerr << "ballbar: warning: " << input << ": " << w << '\n';
-        if (store_file) {
-            storage::Store store(resolve_db_path(globals));
-            l.session = storage::import_trace(store, l.trace, input);
-        }
-        return l;
-    }
-    if (!looks_like_session_key(input)) throw Error(ErrorCategory::bad_input, input + ": no such file");
-    storage::StoreOptions so;
-    so.recover = false;
-    storage::Store store(existing_db_path(globals), so);  // a session is looked for, never a database made
-    note_database_damage(store.damage());
-    const auto id = store.find_session(input);
-    try {
-        l.trace = storage::load_trace(store, id);
-    } catch (const storage::StorageError&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw Error(ErrorCategory::bad_input, e.what());
-    }
-    l.session = id;
-    return l;
-}
-
 int run_analyze(const AnalyzeOptions& o, const Globals& globals) {
-    std::vector<circ::CircularResult> results;
-    std::vector<Loaded> inputs;
+    std::optional<storage::Store> reader, writer;
+    const workflow::StoreOpener sessions = [&]() -> storage::Store& {
+        if (!reader) {
+            storage::StoreOptions so;
+            so.recover = false;                             // leave sessions of a running acquisition alone
+            reader.emplace(existing_db_path(globals), so);  // a session is looked for, never a database made
+            note_database_damage(reader->damage());
+        }
+        return *reader;
+    };
+    const workflow::StoreOpener for_writing = [&]() -> storage::Store& {
+        if (!writer) writer.emplace(resolve_db_path(globals));
+        return *writer;
+    };
+    workflow::CircularAnalyzeOptions ao;
+    ao.import_files = o.store;
+    ao.tolerance_um = o.tolerance_um;
+    workflow::CircularAnalysis a;
     try {
-        for (const auto& in : o.inputs) {
-            inputs.push_back(load_input(in, globals, o.store));
-            try {
-                results.push_back(circ::analyze_circular(inputs.back().trace.test, inputs.back().trace.samples));
-            } catch (const circ::CircularError& e) {
-                throw Error(ErrorCategory::bad_input, in + ": " + e.what());
-            }
-        }
-        nlohmann::ordered_json all = nlohmann::ordered_json::array();
-        for (std::size_t i = 0; i < results.size(); ++i) {
-            auto j = circle_result_json(results[i], inputs[i].trace, o.tolerance_um);
-            if (!o.controller.empty()) j["controller"] = controller_json(results[i], o.controller);
-            if (inputs[i].session) {
-                storage::Store store(resolve_db_path(globals));
-                store.add_result(*inputs[i].session, "circular", j.dump(), std::nullopt, "ballbar circular/1");
-                j["session"] = *inputs[i].session;
-            }
-            all.push_back(j);
-        }
-        std::optional<circ::VolumetricResult> vol;
-        if (results.size() > 1) {
-            try {
-                vol = circ::combine_volumetric(results);
-            } catch (const circ::CircularError& e) {
-                throw Error(ErrorCategory::bad_input, e.what());
-            }
-        }
-        if (o.json) {
-            if (results.size() == 1) {
-                std::cout << all[0].dump(2) << '\n';
-            } else {
-                nlohmann::ordered_json j = {{"tests", all}, {"volumetric", volumetric_json(*vol)}};
-                std::cout << j.dump(2) << '\n';
-            }
-        } else {
-            for (std::size_t i = 0; i < results.size(); ++i) {
-                std::cout << (results.size() > 1 ? "== " + inputs[i].name + "\n" : "");
-                print_circle_result(std::cout, results[i], inputs[i].trace, o.tolerance_um);
-                if (!o.controller.empty()) print_controller(std::cout, results[i], o.controller);
-                if (inputs[i].session) std::cout << "stored with session " << *inputs[i].session << '\n';
-            }
-            if (vol) print_volumetric(std::cout, *vol);
-        }
-        if (o.tolerance_um) {
-            for (const auto& r : results)
-                for (const auto& run : r.runs)
-                    if (run.circularity_um > *o.tolerance_um) return kExitFailure;
-        }
-        return kExitOk;
+        a = workflow::analyze_circular_inputs(o.inputs, sessions, for_writing, ao);
     } catch (const storage::StorageError& e) {
         throw as_error(e);
     }
+    for (const auto& w : a.warnings) std::cerr << "ballbar: warning: " << w << '\n';
+    if (o.json) {
+        nlohmann::ordered_json all = nlohmann::ordered_json::array();
+        for (const auto& t : a.tests) {
+            auto j = nlohmann::ordered_json::parse(t.payload_json);
+            if (!o.controller.empty()) j["controller"] = controller_json(t.result, o.controller);
+            if (t.input.session) j["session"] = *t.input.session;
+            all.push_back(j);
+        }
+        if (a.tests.size() == 1) {
+            std::cout << all[0].dump(2) << '\n';
+        } else {
+            nlohmann::ordered_json j = {{"tests", all}, {"volumetric", volumetric_json(*a.volumetric)}};
+            std::cout << j.dump(2) << '\n';
+        }
+    } else {
+        for (const auto& t : a.tests) {
+            std::cout << (a.tests.size() > 1 ? "== " + t.input.name + "\n" : "");
+            print_circle_result(std::cout, t.result, t.input.trace, o.tolerance_um);
+            if (!o.controller.empty()) print_controller(std::cout, t.result, o.controller);
+            if (t.input.session)
+                std::cout << (t.stored ? "stored with session " : "already stored with session ") << *t.input.session
+                          << '\n';
+        }
+        if (a.volumetric) print_volumetric(std::cout, *a.volumetric);
+    }
+    if (o.tolerance_um) {
+        for (const auto& t : a.tests)
+            for (const auto& run : t.result.runs)
+                if (run.circularity_um > *o.tolerance_um) return kExitFailure;
+    }
+    return kExitOk;
 }
 
 }  // namespace

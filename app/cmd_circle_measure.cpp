@@ -21,11 +21,10 @@
 #include "ballbar/acquisition/circular_session.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
-#include "ballbar/storage/sample_writer.hpp"
 #include "ballbar/storage/trace_file.hpp"
+#include "ballbar/workflow/circular_demo.hpp"
 #include "ballbar/workflow/circular_measure.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
-#include "ballbar/workflow/pty_emulator.hpp"
 #include "ballbar/workflow/session_io.hpp"
 #include "circle_measure.hpp"
 #include "circle_output.hpp"
@@ -279,29 +278,6 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
 
 // ---- demo --test circular ------------------------------------------------------------------------------
 
-/// The demo's machine: every effect of trace.md at once, each at a few µm of radial amplitude.
-device::ContinuousErrors demo_errors() {
-    device::ContinuousErrors e;
-    const double lag[3] = {8.0, 5.0, 6.5}, backlash[3] = {3.0, -2.0, 2.5}, spike[3] = {2.0, 1.5, 1.8},
-                 scale[3] = {15.0, -10.0, 8.0}, cyclic[3] = {0.8, 0.0, 0.7}, pitch[3] = {6.0, 0.0, 5.0};
-    for (std::size_t a = 0; a < 3; ++a) {
-        e.axis[a].servo_lag_ms = lag[a];
-        e.axis[a].backlash_um = backlash[a];
-        e.axis[a].reversal_spike_um = spike[a];
-        e.axis[a].scale_ppm = scale[a];
-        e.axis[a].cyclic_um = cyclic[a];
-        e.axis[a].cyclic_pitch_mm = pitch[a];
-        e.axis[a].cyclic_phase_deg = 30.0 * static_cast<double>(a);
-    }
-    e.squareness_um_per_m = {25.0, -20.0, 30.0};
-    e.straightness_um_per_m2[0][1] = 150.0;   // X bows in Y
-    e.straightness_um_per_m2[1][2] = -120.0;  // Y bows in Z
-    e.straightness_um_per_m2[2][0] = 100.0;   // Z bows in X
-    e.vibration_um = 0.6;
-    e.vibration_hz = 31.0;
-    return e;
-}
-
 }  // namespace
 
 int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
@@ -315,68 +291,33 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
     mo.test.feed_in_mm = 0.8;  // the bar's ±1 mm range holds the stand at R + feed-in
     mo.test.arc_deg = arc;
     const circ::TestSpec test = test_from_options(mo);
-    const auto dialect = analysis::NcDialect::Fanuc;
-    const double dwell_s = 1.0;
-
-    device::EmulatorConfig cfg;
-    cfg.seed = o.seed;
-    cfg.instrument.calibrated_length_mm = test.radius_mm;
-    cfg.instrument.noise_um = 0.15;
-    cfg.instrument.serial = "EMU" + std::to_string(10000 + ::getpid() % 90000);
-    cfg.continuous = demo_errors();
-    cfg.machine.socket_offset_mm = analysis::Vec3(0.012, -0.008, 0.015);
-    const auto ax = circ::plane_axis_index(test.plane);
-    analysis::Vec3 start(test.centre_mm[0], test.centre_mm[1], test.centre_mm[2]);
-    const double a0 = analysis::deg_to_rad(test.runs.front().start_deg);
-    start[ax[0]] += (test.radius_mm + test.feed_in_mm) * std::cos(a0);
-    start[ax[1]] += (test.radius_mm + test.feed_in_mm) * std::sin(a0);
-    cfg.machine.start = {start.x(), start.y(), start.z(), 0, 0, 0};
-    cfg.program = device::NcSource{acq::circular_program(test, dialect, dwell_s), dialect, false, ""};
-    if (!o.faults.empty()) {
-        std::string text = o.faults;
-        const auto first = text.find_first_not_of(" \t\n");
-        if (first == std::string::npos || text[first] != '{') text = read_file(o.faults, "faults file");
-        try {
-            cfg.faults = device::parse_emulator_config("{\"faults\": " + text + "}").faults;
-        } catch (const std::invalid_argument& e) {
-            throw Error(ErrorCategory::bad_input, std::string("--faults: ") + e.what());
-        }
-    }
-    workflow::PtyEmulator emulator(cfg);
 
     storage::StoreOptions so;
     so.sync_full = false;
     storage::Store store(resolve_db_path(globals), so);
-    const std::int64_t id = workflow::create_circular_session(
-        store, test, dialect, dwell_s, storage::SessionSource::emulator, "demo",
-        "ballbar demo --test circular --plane " + o.plane + " --seed " + std::to_string(o.seed));
+    workflow::CircularDemoOptions demo;
+    demo.test = test;
+    demo.seed = o.seed;
+    if (!o.faults.empty()) demo.faults = parse_faults_option(o.faults);
+    demo.notes = "ballbar demo --test circular --plane " + o.plane + " --seed " + std::to_string(o.seed);
+    demo.on_started = [&](const std::string& pty, std::int64_t) {
+        if (!o.json)
+            std::cout << "ballbar demo --test circular: " << circ::plane_name(test.plane) << ", radius "
+                      << test.radius_mm << " mm, feed " << test.feed_mm_min << " mm/min, data arc " << arc
+                      << "°; emulator on " << pty << "\n";
+    };
     const bool show = !o.json && ::isatty(STDERR_FILENO);
-    if (!o.json)
-        std::cout << "ballbar demo --test circular: " << circ::plane_name(test.plane) << ", radius " << test.radius_mm
-                  << " mm, feed " << test.feed_mm_min << " mm/min, data arc " << arc << "°; emulator on "
-                  << emulator.path() << "\n";
     std::ostringstream discard;
     CircleOperator op(show ? CircleOperator::Mode::Scripted : CircleOperator::Mode::Quiet, std::cin,
                       show ? std::cerr : static_cast<std::ostream&>(discard), false, "", "");
-    workflow::PreparedCircular prepared;
-    prepared.session = id;
-    prepared.test = test;
-    prepared.dialect = dialect;
-    prepared.dwell_s = dwell_s;
-    workflow::CircularMeasureOptions measure;
-    measure.device_uri = "emulator:";
-    measure.open_transport = [&emulator] { return device::open_transport("serial:" + emulator.path()); };
-    const workflow::CircularMeasureResult run = workflow::measure_circular(store, prepared, op, measure);
-    emulator.halt();
-    workflow::throw_unless_completed(run.summary, id, "ballbar demo --test circular (a demo session is not resumed)");
+    const workflow::CircularDemoResult run = workflow::run_circular_demo(store, demo, op);
+    const std::int64_t id = run.session;
     const acq::CircularSummary& sum = run.summary;
-    const circ::CircularResult& result = run.stored->result;
-    const auto checks =
-        device::compare_with_truth(result, emulator.emulator().continuous()->truth(test.plane, test.radius_mm));
-    bool pass = true;
+    const circ::CircularResult& result = run.result;
+    const auto& checks = run.checks;
+    const bool pass = run.pass;
     ojson diags = ojson::array();
     for (const auto& c : checks) {
-        pass = pass && c.pass;
         diags.push_back({{"key", c.key},
                          {"unit", circ::diagnostic_unit(c.diag)},
                          {"value", c.measured ? ojson(*c.measured) : ojson(nullptr)},
@@ -387,7 +328,6 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
                          {"pass", c.pass},
                          {"note", text_or_null(c.note)}});
     }
-    const auto& ec = emulator.emulator().counters();
     ojson out = {
         {"session", id},
         {"plane", circ::plane_name(test.plane)},
@@ -400,8 +340,8 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
         {"gaps", sum.gaps},
         {"lost_samples", sum.lost_samples},
         {"duplicates_dropped", sum.duplicates_dropped},
-        {"dropped_frames", ec.dropped_frames},
-        {"replayed_frames", ec.replayed_frames},
+        {"dropped_frames", run.dropped_frames},
+        {"replayed_frames", run.replayed_frames},
         {"runs", ojson::array()},
         {"bidirectional_circularity_um", result.bidirectional_um ? ojson(*result.bidirectional_um) : ojson(nullptr)},
         {"diagnostics", diags},

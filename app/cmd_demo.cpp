@@ -53,17 +53,6 @@ struct DemoOptions {
 };
 
 /// --faults SPEC: the emulator's "faults" object, inline JSON or a file holding it.
-device::FaultConfig parse_faults(const std::string& spec) {
-    std::string text = spec;
-    const auto first = spec.find_first_not_of(" \t\n");
-    if (first == std::string::npos || spec[first] != '{') text = read_file(spec, "faults file");
-    try {
-        return device::parse_emulator_config("{\"faults\": " + text + "}").faults;
-    } catch (const std::invalid_argument& e) {
-        throw Error(ErrorCategory::bad_input, std::string("--faults: ") + e.what());
-    }
-}
-
 /// The angles of one orientation entry in arcseconds ("d_alpha -46.66\""): those under `prefix` + name
 /// + "_rad", the measured ones (prefix "") with ± their standard uncertainty and flagged (figures.hpp)
 /// when more than 5σ from the true value.
@@ -132,7 +121,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         }
         demo.plan->answers.on_point_failure = acq::PointFailureAction::Retry;  // the demo's operator never gives up
     }
-    if (!o.faults.empty()) demo.faults = parse_faults(o.faults);
+    if (!o.faults.empty()) demo.faults = parse_faults_option(o.faults);
 
     // A killed demo loses at most its last batch; the demo does not need an fsync per commit.
     storage::StoreOptions so;

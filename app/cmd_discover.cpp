@@ -22,7 +22,6 @@
 #include "ballbar/storage/model_codec.hpp"
 #include "ballbar/storage/readings.hpp"
 #include "ballbar/storage/readings_file.hpp"
-#include "ballbar/storage/sqlite.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/workflow/discover.hpp"
 #include "ballbar/workflow/identify.hpp"

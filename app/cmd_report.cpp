@@ -11,7 +11,6 @@
 
 #include "ballbar/report/build.hpp"
 #include "ballbar/report/report.hpp"
-#include "ballbar/storage/sqlite.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/version.hpp"
 #include "command.hpp"

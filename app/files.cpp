@@ -57,6 +57,17 @@ std::string read_program_file(const std::string& path, const char* what) {
     }
 }
 
+device::FaultConfig parse_faults_option(const std::string& spec) {
+    std::string text = spec;
+    const auto first = spec.find_first_not_of(" \t\n");
+    if (first == std::string::npos || spec[first] != '{') text = read_file(spec, "faults file");
+    try {
+        return device::parse_emulator_config("{\"faults\": " + text + "}").faults;
+    } catch (const std::invalid_argument& e) {
+        throw Error(ErrorCategory::bad_input, std::string("--faults: ") + e.what());
+    }
+}
+
 std::vector<fileio::Protected> database_files(const Globals& globals) {
     const std::string db = resolve_db_path(globals);
     return {{db, "database"},

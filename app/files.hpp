@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ballbar/device/emulator.hpp"
 #include "ballbar/fileio/input.hpp"
 #include "ballbar/fileio/output.hpp"
 #include "command.hpp"
@@ -25,6 +26,10 @@ std::string printable(std::string_view text, bool keep_newlines = false);
 
 /// A whole NC program (at most fileio::kMaxTextBytes, lines of at most fileio::kMaxLineBytes).
 std::string read_program_file(const std::string& path, const char* what);
+
+/// --faults: the emulator's "faults" object (docs/emulator.md), inline JSON or a file holding it. Error
+/// (bad input) naming what is wrong.
+device::FaultConfig parse_faults_option(const std::string& spec);
 
 /// The database and its side files (-wal, -shm, -journal): never an output.
 std::vector<fileio::Protected> database_files(const Globals& globals);

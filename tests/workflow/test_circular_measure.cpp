@@ -13,11 +13,14 @@
 
 #include "../scratch_dir.hpp"
 #include "ballbar/acquisition/circle_program.hpp"
+#include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/pipe.hpp"
 #include "ballbar/storage/trace_file.hpp"
 #include "ballbar/workflow/circular_measure.hpp"
+#include "ballbar/workflow/circular_test.hpp"
 #include "ballbar/workflow/error.hpp"
+#include "ballbar/workflow/import_export.hpp"
 
 namespace ballbar::workflow {
 namespace {
@@ -192,6 +195,94 @@ TEST(CircularMeasureUseCase, OnlyACircularSessionThatExistsIsTakenUp) {
         EXPECT_NE(std::string(e.what()).find("not a circular test"), std::string::npos) << e.what();
     }
     EXPECT_EQ(store.session(ssm).state, storage::SessionState::interrupted) << "nothing changed";
+}
+
+TEST(CircularAnalysisUseCase, ASessionAnalysedAgainStoresNoDuplicateAndItsFileGivesTheSameResult) {
+    ballbar::test::ScratchDir d{"circular-wf"};
+    storage::Store store((d.path / "c.db").string());
+    const fs::path program = d.path / "circle.nc";
+    PreparedCircular p;
+    p.test = xy_test();
+    ProgramOperator op(program, acq::circular_program(p.test, p.dialect, p.dwell_s));
+    const CircularMeasureResult r =
+        measure_circular(store, p, op, simulated_circular_measure(emulator_config(d, program)));
+    ASSERT_TRUE(r.session_id.has_value());
+    const std::string key = std::to_string(*r.session_id);
+    const auto circular_results = [&] {
+        int n = 0;
+        for (const auto& res : store.results(*r.session_id)) n += res.kind == "circular";
+        return n;
+    };
+    const StoreOpener opener = [&store]() -> storage::Store& { return store; };
+    const std::vector<std::string> inputs{key};
+    for (int i = 0; i < 2; ++i) {
+        const CircularAnalysis again = analyze_circular_inputs(inputs, opener, opener, {});
+        ASSERT_EQ(again.tests.size(), 1u);
+        EXPECT_FALSE(again.tests[0].stored) << "the session already holds this result";
+        EXPECT_EQ(again.tests[0].payload_json, r.stored->payload_json);
+    }
+    EXPECT_EQ(circular_results(), 1);
+    CircularAnalyzeOptions with_tolerance;
+    with_tolerance.tolerance_um = 50.0;  // another verdict: another result, stored once
+    EXPECT_TRUE(analyze_circular_inputs(inputs, opener, opener, with_tolerance).tests[0].stored);
+    EXPECT_FALSE(analyze_circular_inputs(inputs, opener, opener, with_tolerance).tests[0].stored);
+    EXPECT_EQ(circular_results(), 2);
+
+    // The session's trace as a file, analysed as a file: the same figures, nothing stored.
+    const fs::path trace = d.path / "exported.csv";
+    std::ofstream(trace) << export_session(store, *r.session_id, ExportFormat::trace);
+    const std::vector<std::string> files{trace.string()};
+    const CircularAnalysis from_file = analyze_circular_inputs(files, opener, opener, {});
+    ASSERT_EQ(from_file.tests.size(), 1u);
+    EXPECT_FALSE(from_file.tests[0].input.session.has_value());
+    EXPECT_NEAR(from_file.tests[0].result.runs[0].circularity_um, r.stored->result.runs[0].circularity_um, 1e-3);
+    EXPECT_EQ(circular_results(), 2);
+
+    // Tests that cannot be combined (one plane twice) and an input that is neither a file nor a session
+    // are refused, storing nothing.
+    for (const std::vector<std::string>& refused :
+         {std::vector<std::string>{key, trace.string()}, std::vector<std::string>{"/no/such/trace.csv"}}) {
+        try {
+            analyze_circular_inputs(refused, opener, opener, with_tolerance);
+            ADD_FAILURE() << "analysed " << refused.back();
+        } catch (const Error& e) {
+            EXPECT_EQ(e.category(), ErrorCategory::bad_input) << e.what();
+        }
+    }
+    EXPECT_EQ(circular_results(), 2);
+
+    // The 3 µm of X backlash the machine has, in LinuxCNC's terms (joint 0 is X).
+    const ControllerSettings cs = controller_settings(r.stored->result, "linuxcnc");
+    ASSERT_EQ(cs.axes.size(), 2u);
+    EXPECT_EQ(cs.axes[0].axis, 'X');
+    ASSERT_TRUE(cs.axes[0].backlash_mm.has_value());
+    EXPECT_NEAR(*cs.axes[0].backlash_mm, 0.003, 0.0006);
+    EXPECT_EQ(cs.axes[0].setting.rfind("[JOINT_0] BACKLASH = 0.00", 0), 0u) << cs.axes[0].setting;
+    EXPECT_THROW(controller_settings(r.stored->result, "acme"), Error);
+}
+
+TEST(CircularPlanUseCase, ARateTooSlowForTheFeedAndATestBeyondTheTravelAreRefused) {
+    const circ::TestSpec t = xy_test();
+    // 1000 mm/min at 1000 readings/s: 0.017 mm between samples, plenty.
+    EXPECT_NE(check_feed_for_rate(t, 1000.0).find("highest usable feed"), std::string::npos);
+    try {
+        check_feed_for_rate(t, 1.0);  // 16.7 mm between samples
+        FAIL() << "a feed too fast for the rate was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.category(), ErrorCategory::bad_input);
+        EXPECT_NE(std::string(e.what()).find("too fast"), std::string::npos) << e.what();
+    }
+    const acq::MachineFile machine = acq::parse_machine_file(
+        R"({"type": "TTTRR", "name": "small", "a_pivot_mm": [0, 0, 0], "c_offset_mm": [0, 0, -100],
+            "travel": {"X_mm": [-50, 50], "Y_mm": [-400, 400], "Z_mm": [-400, 400]}})");
+    try {
+        circular_part_program(t, analysis::NcDialect::Fanuc, 1.0, &machine);
+        FAIL() << "a test beyond X's travel was planned";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("travel of X"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(circular_part_program(t, analysis::NcDialect::Fanuc, 1.0),
+              acq::circular_program(t, analysis::NcDialect::Fanuc, 1.0));
 }
 
 }  // namespace
