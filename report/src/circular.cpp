@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "ballbar/report/decimate.hpp"
+#include "ballbar/storage/circular_result.hpp"
+#include "ballbar/storage/machine_json.hpp"
 
 namespace ballbar::report {
 
@@ -17,38 +19,6 @@ namespace {
 
 using nlohmann::json;
 constexpr double kDeg = std::numbers::pi / 180.0;
-
-[[noreturn]] void bad(const std::string& key, const std::string& what) {
-    throw ReportError("result \"circular\": \"" + key + "\" " + what);
-}
-
-const json* find(const json& j, const char* key) {
-    if (!j.is_object()) return nullptr;
-    const auto it = j.find(key);
-    return it == j.end() || it->is_null() ? nullptr : &*it;
-}
-std::optional<double> opt_num(const json& j, const char* key, const std::string& where = {}) {
-    const json* v = find(j, key);
-    if (!v) return std::nullopt;
-    if (!v->is_number()) bad(where + key, "must be a number");
-    return v->get<double>();
-}
-double num(const json& j, const char* key, const std::string& where = {}) {
-    const auto v = opt_num(j, key, where);
-    if (!v) bad(where + key, "is missing");
-    return *v;
-}
-std::string str(const json& j, const char* key, const std::string& where = {}) {
-    const json* v = find(j, key);
-    if (!v) return {};
-    if (!v->is_string()) bad(where + key, "must be a string");
-    return v->get<std::string>();
-}
-const json& object(const json& j, const char* key) {
-    const json* v = find(j, key);
-    if (!v || !v->is_object()) bad(key, "must be an object");
-    return *v;
-}
 
 bool ends_with(std::string_view s, std::string_view suffix) {
     return s.size() >= suffix.size() && s.substr(s.size() - suffix.size()) == suffix;
@@ -78,11 +48,10 @@ void name_and_unit(CircularDiagnostic& d) {
     d.name = k;
 }
 
-Range range_of(const json* r) {
+Range range_of(std::optional<double> min, std::optional<double> max) {
     Range out;
-    if (!r || !r->is_object()) return out;
-    out.min = opt_num(*r, "min", "conditions.");
-    out.max = opt_num(*r, "max", "conditions.");
+    out.min = min;
+    out.max = max;
     if (out.min && out.max) out.mean = 0.5 * (*out.min + *out.max);  // the middle of the range
     return out;
 }
@@ -97,143 +66,81 @@ bool CircularTest::pass() const {
 }
 
 void add_circular(Report& report, std::string_view, const json& p) {
+    storage::CircularRecord rec;
+    try {
+        rec = storage::circular_result_from_json(p.dump());
+    } catch (const storage::FormatError& e) {
+        throw ReportError(e.what());
+    }
     CircularTest c;
-    const json& test = object(p, "test");
-    c.plane = str(test, "plane", "test.");
-    c.radius_mm = num(test, "radius_mm", "test.");
-    c.feed_mm_min = num(test, "feed_mm_min", "test.");
-    c.feed_in_mm = opt_num(test, "feed_in_mm", "test.").value_or(0);
-    if (const json* ctr = find(test, "centre_mm"); ctr && ctr->is_array() && ctr->size() == 3)
-        for (int i = 0; i < 3; ++i)
-            if ((*ctr)[static_cast<std::size_t>(i)].is_number())
-                c.centre_mm[i] = (*ctr)[static_cast<std::size_t>(i)].get<double>();
-    const json* specs = find(test, "runs");
-    const json* runs = find(p, "runs");
-    if (!runs || !runs->is_array() || runs->empty()) bad("runs", "must be a non-empty array");
-    for (std::size_t i = 0; i < runs->size(); ++i) {
-        const json& j = (*runs)[i];
-        const std::string where = "runs[" + std::to_string(i) + "].";
+    c.plane = rec.plane;
+    c.radius_mm = rec.radius_mm;
+    c.feed_mm_min = rec.feed_mm_min;
+    c.feed_in_mm = rec.feed_in_mm;
+    c.centre_mm = Vec3(rec.centre_mm[0], rec.centre_mm[1], rec.centre_mm[2]);
+    for (const auto& sr : rec.runs) {
         CircularRun r;
-        r.direction = str(j, "direction", where);
-        r.circularity_um = num(j, "circularity_um", where);
-        if (const json* f = find(j, "radial_deviation_um")) {
-            r.radial_max_um = num(*f, "max", where + "radial_deviation_um.");
-            r.radial_min_um = num(*f, "min", where + "radial_deviation_um.");
-        }
-        r.feed_in_end_s = opt_num(j, "feed_in_end_s", where);
-        r.feed_in_lag_ms = opt_num(j, "feed_in_lag_ms", where);
-        r.data_start_s = opt_num(j, "data_start_s", where);
-        r.data_end_s = opt_num(j, "data_end_s", where);
-        r.samples = opt_num(j, "samples", where);
-        if (specs && specs->is_array() && i < specs->size()) {
-            const json& s = (*specs)[i];
-            r.start_deg = opt_num(s, "start_deg", "test." + where).value_or(0);
-            r.overshoot_deg = opt_num(s, "overshoot_deg", "test." + where).value_or(0);
-            r.data_arc_deg = opt_num(s, "data_arc_deg", "test." + where).value_or(360);
-        }
+        r.direction = sr.direction;
+        r.start_deg = sr.start_deg;
+        r.overshoot_deg = sr.overshoot_deg;
+        r.data_arc_deg = sr.data_arc_deg;
+        r.circularity_um = sr.circularity_um;
+        r.radial_max_um = sr.radial_max_um.value_or(0);
+        r.radial_min_um = sr.radial_min_um.value_or(0);
+        r.feed_in_end_s = sr.feed_in_end_s;
+        r.feed_in_lag_ms = sr.feed_in_lag_ms;
+        r.data_start_s = sr.data_start_s;
+        r.data_end_s = sr.data_end_s;
+        r.samples = sr.samples;
         c.runs.push_back(std::move(r));
     }
-    c.bidirectional_um = opt_num(p, "bidirectional_circularity_um");
-    if (const json* f = find(p, "radial_deviation_um")) {
-        c.radial_max_um = num(*f, "max", "radial_deviation_um.");
-        c.radial_min_um = num(*f, "min", "radial_deviation_um.");
-    }
+    c.bidirectional_um = rec.bidirectional_um;
+    c.radial_max_um = rec.radial_max_um.value_or(0);
+    c.radial_min_um = rec.radial_min_um.value_or(0);
     // Diagnostics: the ranked ones in their order, each followed by its pitch or frequency, then the rest.
-    // Stored as one list ({key, unit, value, value_std, share_percent, rank}, docs/cli.md), or, before
-    // the vocabulary, as maps (diagnostics, uncertainties, shares_percent) and a ranking: the list is
-    // read into the maps' form.
-    json from_list_diags = json::object(), from_list_unc = json::object(), from_list_shares = json::object();
-    std::vector<std::string> order;
-    const json* diags = find(p, "diagnostics");
-    const json* unc = find(p, "uncertainties");
-    const json* shares = find(p, "shares_percent");
-    if (diags && diags->is_array()) {
-        std::vector<std::pair<int, std::string>> ranked;
-        for (std::size_t i = 0; i < diags->size(); ++i) {
-            const json& d = (*diags)[i];
-            const std::string where = "diagnostics[" + std::to_string(i) + "].";
-            const std::string key = str(d, "key", where);
-            from_list_diags[key] = num(d, "value", where);
-            if (const auto u = opt_num(d, "value_std", where)) from_list_unc[key] = *u;
-            if (const auto sh = opt_num(d, "share_percent", where)) from_list_shares[key] = *sh;
-            if (const auto rk = opt_num(d, "rank", where)) ranked.emplace_back(static_cast<int>(*rk), key);
-        }
-        std::sort(ranked.begin(), ranked.end());
-        for (const auto& [rk, key] : ranked) order.push_back(key);
-        diags = &from_list_diags;
-        unc = &from_list_unc;
-        shares = &from_list_shares;
-    } else if (const json* ranking = find(p, "ranking"); ranking && ranking->is_array()) {
-        for (const auto& k : *ranking)
-            if (k.is_string()) order.push_back(k.get<std::string>());
-    }
+    std::vector<const storage::StoredCircularDiagnostic*> ranked;
+    for (const auto& d : rec.diagnostics)
+        if (d.rank) ranked.push_back(&d);
+    std::stable_sort(ranked.begin(), ranked.end(), [](const auto* a, const auto* b) { return *a->rank < *b->rank; });
     auto companion = [](const std::string& key) -> std::string {
         if (key.rfind("cyclic_error_", 0) == 0) return "cyclic_pitch_" + key.substr(13, 1) + "_mm";
         if (key == "vibration_um") return "vibration_hz";
         return {};
     };
     std::vector<std::string> keys;
-    for (const auto& k : order) {
-        keys.push_back(k);
-        if (const std::string m = companion(k); !m.empty()) keys.push_back(m);
+    for (const auto* d : ranked) {
+        keys.push_back(d->key);
+        if (const std::string m = companion(d->key); !m.empty()) keys.push_back(m);
     }
-    if (diags && diags->is_object())
-        for (const auto& [k, v] : diags->items())
-            if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
+    for (const auto& d : rec.diagnostics)
+        if (std::find(keys.begin(), keys.end(), d.key) == keys.end()) keys.push_back(d.key);
     int rank = 0;
     for (const auto& k : keys) {
-        if (!diags || !diags->is_object() || !diags->contains(k)) continue;
+        const auto it =
+            std::find_if(rec.diagnostics.begin(), rec.diagnostics.end(), [&k](const auto& d) { return d.key == k; });
+        if (it == rec.diagnostics.end()) continue;
         CircularDiagnostic d;
         d.key = k;
-        d.value = num(*diags, k.c_str(), "diagnostics.");
-        if (unc) d.uncertainty = opt_num(*unc, k.c_str(), "uncertainties.");
-        if (shares) d.share_percent = opt_num(*shares, k.c_str(), "shares_percent.");
-        if (std::find(order.begin(), order.end(), k) != order.end()) d.rank = ++rank;
+        d.value = it->value;
+        d.uncertainty = it->value_std;
+        d.share_percent = it->share_percent;
+        if (it->rank) d.rank = ++rank;
         name_and_unit(d);
         c.diagnostics.push_back(std::move(d));
     }
-    if (const json* nd = find(p, "not_detected"); nd && nd->is_array())
-        for (const auto& k : *nd)
-            if (k.is_string()) c.not_detected.push_back(k.get<std::string>());
-    if (const json* groups = find(p, "unseparable"); groups && groups->is_array()) {
-        for (const auto& g : *groups) {
-            CircularUnseparable u;
-            if (const json* ks = find(g, "keys"); ks && ks->is_array())
-                for (const auto& k : *ks)
-                    if (k.is_string()) u.keys.push_back(k.get<std::string>());
-            u.reason = str(g, "reason", "unseparable.");
-            if (const json* comb = find(g, "combined")) {  // before the vocabulary
-                u.combined_key = str(*comb, "as", "unseparable.combined.");
-                u.combined_value = opt_num(*comb, "value", "unseparable.combined.");
-                u.combined_uncertainty = opt_num(*comb, "std_uncertainty", "unseparable.combined.");
-            } else if (find(g, "combined_key")) {
-                u.combined_key = str(g, "combined_key", "unseparable.");
-                u.combined_value = opt_num(g, "combined_value", "unseparable.");
-                u.combined_uncertainty = opt_num(g, "combined_value_std", "unseparable.");
-            }
-            c.unseparable.push_back(std::move(u));
-        }
-    }
-    c.residual_rms_um = opt_num(p, "residual_rms_um");
-    if (const json* m = find(p, "mean_radius_um"); m && m->is_object()) {  // before the vocabulary
-        c.mean_radius_um = opt_num(*m, "value", "mean_radius_um.");
-        c.mean_radius_uncertainty_um = opt_num(*m, "std_uncertainty", "mean_radius_um.");
-    } else {
-        c.mean_radius_um = opt_num(p, "mean_radius_um");
-        c.mean_radius_uncertainty_um = opt_num(p, "mean_radius_um_std");
-    }
-    if (const json* cond = find(p, "conditions")) {
-        c.sample_rate_hz = opt_num(*cond, "sample_rate_hz", "conditions.");
-        c.samples_used = opt_num(*cond, "samples_used", "conditions.");
-        c.bar_temp_C = range_of(find(*cond, "bar_temp_C"));
-        c.air_temp_C = range_of(find(*cond, "air_temp_C"));
-        if (const json* ins = find(*cond, "instrument"))
-            c.instrument = ins->is_string() ? ins->get<std::string>() : ins->dump();
-    }
-    if (const json* tol = find(p, "tolerance")) {
-        c.tolerance_um = opt_num(*tol, "circularity_um", "tolerance.");
-        if (c.tolerance_um) c.tolerance_source = "stored with the result";
-    }
+    c.not_detected = rec.not_detected;
+    for (const auto& g : rec.unseparable)
+        c.unseparable.push_back({g.keys, g.reason, g.combined_key, g.combined_value, g.combined_value_std});
+    c.residual_rms_um = rec.residual_rms_um;
+    c.mean_radius_um = rec.mean_radius_um;
+    c.mean_radius_uncertainty_um = rec.mean_radius_um_std;
+    c.sample_rate_hz = rec.sample_rate_hz;
+    c.samples_used = rec.samples_used;
+    c.bar_temp_C = range_of(rec.bar_temp_min_C, rec.bar_temp_max_C);
+    c.air_temp_C = range_of(rec.air_temp_min_C, rec.air_temp_max_C);
+    c.instrument = rec.instrument;
+    c.tolerance_um = rec.tolerance_um;
+    if (c.tolerance_um) c.tolerance_source = "stored with the result";
     report.circular = std::move(c);
 }
 

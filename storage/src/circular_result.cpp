@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "ballbar/storage/machine_json.hpp"
+
 namespace ballbar::storage {
 
 namespace {
@@ -83,6 +85,179 @@ std::string circular_result_json(const circ::CircularResult& r, const TraceFile&
         j["tolerance"] = {{"circularity_um", *tolerance_um}, {"pass", pass}};
     }
     return j.dump();
+}
+
+}  // namespace ballbar::storage
+
+namespace ballbar::storage {
+namespace {
+
+using json = nlohmann::json;
+
+[[noreturn]] void bad_circular(const std::string& key, const std::string& what) {
+    throw FormatError("result \"circular\": \"" + key + "\" " + what);
+}
+/// A key's value; null is absent.
+const json* find(const json& j, const char* key) {
+    if (!j.is_object()) return nullptr;
+    const auto it = j.find(key);
+    return it == j.end() || it->is_null() ? nullptr : &*it;
+}
+std::optional<double> opt_num(const json& j, const char* key, const std::string& where = {}) {
+    const json* v = find(j, key);
+    if (!v) return std::nullopt;
+    if (!v->is_number()) bad_circular(where + key, "must be a number");
+    return v->get<double>();
+}
+double num(const json& j, const char* key, const std::string& where = {}) {
+    const auto v = opt_num(j, key, where);
+    if (!v) bad_circular(where + key, "is missing");
+    return *v;
+}
+std::string str(const json& j, const char* key, const std::string& where = {}) {
+    const json* v = find(j, key);
+    if (!v) return {};
+    if (!v->is_string()) bad_circular(where + key, "must be a string");
+    return v->get<std::string>();
+}
+std::vector<std::string> strings(const json* list) {
+    std::vector<std::string> out;
+    if (list && list->is_array())
+        for (const auto& k : *list)
+            if (k.is_string()) out.push_back(k.get<std::string>());
+    return out;
+}
+
+/// The diagnostics as stored before the vocabulary: maps key → value (diagnostics, uncertainties,
+/// shares_percent) and the ranked keys in order (ranking).
+std::vector<StoredCircularDiagnostic> diagnostics_from_maps(const json& p) {
+    std::vector<StoredCircularDiagnostic> out;
+    const json* values = find(p, "diagnostics");
+    if (!values || !values->is_object()) return out;
+    const json* unc = find(p, "uncertainties");
+    const json* shares = find(p, "shares_percent");
+    const std::vector<std::string> ranking = strings(find(p, "ranking"));
+    for (const auto& [key, v] : values->items()) {
+        StoredCircularDiagnostic d;
+        d.key = key;
+        d.value = num(*values, key.c_str(), "diagnostics.");
+        if (unc) d.value_std = opt_num(*unc, key.c_str(), "uncertainties.");
+        if (shares) d.share_percent = opt_num(*shares, key.c_str(), "shares_percent.");
+        if (const auto at = std::find(ranking.begin(), ranking.end(), key); at != ranking.end())
+            d.rank = static_cast<int>(at - ranking.begin()) + 1;
+        out.push_back(std::move(d));
+    }
+    return out;
+}
+
+}  // namespace
+
+CircularRecord circular_result_from_json(std::string_view text) {
+    json p;
+    try {
+        p = json::parse(text);
+    } catch (const json::exception& e) {
+        throw FormatError(std::string("result \"circular\" is not valid JSON: ") + e.what());
+    }
+    if (!p.is_object()) throw FormatError("result \"circular\" is not a JSON object");
+    CircularRecord c;
+    const json* test = find(p, "test");
+    if (!test || !test->is_object()) bad_circular("test", "must be an object");
+    c.plane = str(*test, "plane", "test.");
+    c.radius_mm = num(*test, "radius_mm", "test.");
+    c.feed_mm_min = num(*test, "feed_mm_min", "test.");
+    c.feed_in_mm = opt_num(*test, "feed_in_mm", "test.").value_or(0);
+    if (const json* ctr = find(*test, "centre_mm"); ctr && ctr->is_array() && ctr->size() == 3)
+        for (std::size_t i = 0; i < 3; ++i)
+            if ((*ctr)[i].is_number()) c.centre_mm[i] = (*ctr)[i].get<double>();
+    const json* specs = find(*test, "runs");
+    const json* runs = find(p, "runs");
+    if (!runs || !runs->is_array() || runs->empty()) bad_circular("runs", "must be a non-empty array");
+    for (std::size_t i = 0; i < runs->size(); ++i) {
+        const json& j = (*runs)[i];
+        const std::string where = "runs[" + std::to_string(i) + "].";
+        StoredCircularRun r;
+        r.direction = str(j, "direction", where);
+        r.circularity_um = num(j, "circularity_um", where);
+        if (const json* f = find(j, "radial_deviation_um")) {
+            r.radial_max_um = num(*f, "max", where + "radial_deviation_um.");
+            r.radial_min_um = num(*f, "min", where + "radial_deviation_um.");
+        }
+        r.feed_in_end_s = opt_num(j, "feed_in_end_s", where);
+        r.feed_in_lag_ms = opt_num(j, "feed_in_lag_ms", where);
+        r.data_start_s = opt_num(j, "data_start_s", where);
+        r.data_end_s = opt_num(j, "data_end_s", where);
+        r.samples = opt_num(j, "samples", where);
+        if (specs && specs->is_array() && i < specs->size()) {
+            const json& s = (*specs)[i];
+            r.start_deg = opt_num(s, "start_deg", "test." + where).value_or(0);
+            r.overshoot_deg = opt_num(s, "overshoot_deg", "test." + where).value_or(0);
+            r.data_arc_deg = opt_num(s, "data_arc_deg", "test." + where).value_or(360);
+        }
+        c.runs.push_back(std::move(r));
+    }
+    c.bidirectional_um = opt_num(p, "bidirectional_circularity_um");
+    if (const json* f = find(p, "radial_deviation_um")) {
+        c.radial_max_um = num(*f, "max", "radial_deviation_um.");
+        c.radial_min_um = num(*f, "min", "radial_deviation_um.");
+    }
+    if (const json* diags = find(p, "diagnostics"); diags && diags->is_array()) {
+        for (std::size_t i = 0; i < diags->size(); ++i) {
+            const json& d = (*diags)[i];
+            const std::string where = "diagnostics[" + std::to_string(i) + "].";
+            StoredCircularDiagnostic sd;
+            sd.key = str(d, "key", where);
+            sd.value = num(d, "value", where);
+            sd.value_std = opt_num(d, "value_std", where);
+            sd.share_percent = opt_num(d, "share_percent", where);
+            if (const auto rk = opt_num(d, "rank", where)) sd.rank = static_cast<int>(*rk);
+            c.diagnostics.push_back(std::move(sd));
+        }
+    } else {
+        c.diagnostics = diagnostics_from_maps(p);
+    }
+    c.not_detected = strings(find(p, "not_detected"));
+    if (const json* groups = find(p, "unseparable"); groups && groups->is_array()) {
+        for (const auto& g : *groups) {
+            StoredUnseparable u;
+            u.keys = strings(find(g, "keys"));
+            u.reason = str(g, "reason", "unseparable.");
+            if (const json* comb = find(g, "combined")) {  // before the vocabulary
+                u.combined_key = str(*comb, "as", "unseparable.combined.");
+                u.combined_value = opt_num(*comb, "value", "unseparable.combined.");
+                u.combined_value_std = opt_num(*comb, "std_uncertainty", "unseparable.combined.");
+            } else if (find(g, "combined_key")) {
+                u.combined_key = str(g, "combined_key", "unseparable.");
+                u.combined_value = opt_num(g, "combined_value", "unseparable.");
+                u.combined_value_std = opt_num(g, "combined_value_std", "unseparable.");
+            }
+            c.unseparable.push_back(std::move(u));
+        }
+    }
+    c.residual_rms_um = opt_num(p, "residual_rms_um");
+    if (const json* m = find(p, "mean_radius_um"); m && m->is_object()) {  // before the vocabulary
+        c.mean_radius_um = opt_num(*m, "value", "mean_radius_um.");
+        c.mean_radius_um_std = opt_num(*m, "std_uncertainty", "mean_radius_um.");
+    } else {
+        c.mean_radius_um = opt_num(p, "mean_radius_um");
+        c.mean_radius_um_std = opt_num(p, "mean_radius_um_std");
+    }
+    if (const json* cond = find(p, "conditions")) {
+        c.sample_rate_hz = opt_num(*cond, "sample_rate_hz", "conditions.");
+        c.samples_used = opt_num(*cond, "samples_used", "conditions.");
+        if (const json* r = find(*cond, "bar_temp_C"); r && r->is_object()) {
+            c.bar_temp_min_C = opt_num(*r, "min", "conditions.bar_temp_C.");
+            c.bar_temp_max_C = opt_num(*r, "max", "conditions.bar_temp_C.");
+        }
+        if (const json* r = find(*cond, "air_temp_C"); r && r->is_object()) {
+            c.air_temp_min_C = opt_num(*r, "min", "conditions.air_temp_C.");
+            c.air_temp_max_C = opt_num(*r, "max", "conditions.air_temp_C.");
+        }
+        if (const json* ins = find(*cond, "instrument"))
+            c.instrument = ins->is_string() ? ins->get<std::string>() : ins->dump();
+    }
+    if (const json* tol = find(p, "tolerance")) c.tolerance_um = opt_num(*tol, "circularity_um", "tolerance.");
+    return c;
 }
 
 }  // namespace ballbar::storage
