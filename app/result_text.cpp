@@ -12,6 +12,7 @@
 #include "ballbar/analysis/error_params.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/storage/compensation_codec.hpp"
+#include "ballbar/storage/discovery_codec.hpp"
 #include "ballbar/storage/identification_codec.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "figures.hpp"
@@ -99,27 +100,21 @@ std::vector<std::string> identification_lines(std::string_view payload) {
     return out;
 }
 
-std::vector<std::string> discovery_lines(const json& j) {
+std::vector<std::string> discovery_lines(const std::string& payload) {
+    const storage::DiscoveryRecord r = storage::discovery_from_json(payload);
     char buf[200];
-    std::snprintf(buf, sizeof buf, "residual RMS %.3f µm -> %.3f µm", num(j, "rms_initial_um"), num(j, "rms_final_um"));
+    std::snprintf(buf, sizeof buf, "residual RMS %.3f µm -> %.3f µm", r.rms_initial_um.value_or(0),
+                  r.rms_final_um.value_or(0));
     std::vector<std::string> out{buf};
-    if (j.contains("model") && j["model"].is_object())
-        out.back() +=
-            ", model " + j["model"].value("name", "?") + " version " + std::to_string(j["model"].value("version", 0));
-    if (!j.contains("steps") || !j["steps"].is_array()) return out;
-    for (const auto& st : j["steps"]) {
-        if (!st.is_object() || st.value("kind", "") != "library") continue;
-        const std::string effect = st.value("effect", "?");
-        const std::string unit = st.value("unit", "");  // outlives u, which only views it
-        ScreenUnit u{1, unit};
-        if (st.contains("iso") && st["iso"].is_string())
-            if (const auto p = ba::parse_param(st["iso"].get<std::string>())) u = screen_unit(ba::param_info(*p).unit);
-        // docs/cli.md's vocabulary (value, value_std), or as results were stored before it (estimate, stderr).
-        const bool before_vocabulary = st.contains("estimate");
-        const double v = num(st, before_vocabulary ? "estimate" : "value");
-        const double sd = num(st, before_vocabulary ? "stderr" : "value_std");
-        out.push_back(effect + " " + with_uncertainty(v * u.factor, sd * u.factor, u.symbol) +
-                      (st.value("accepted", true) ? "" : " (withdrawn)"));
+    if (!r.model_name.empty())
+        out.back() += ", model " + r.model_name + " version " + std::to_string(r.model_version.value_or(0));
+    for (const auto& st : r.steps) {
+        if (st.kind != "library" || !st.value) continue;
+        ScreenUnit u{1, st.unit};
+        if (const auto p = ba::parse_param(st.iso)) u = screen_unit(ba::param_info(*p).unit);
+        out.push_back(st.effect + " " +
+                      with_uncertainty(*st.value * u.factor, st.value_std.value_or(0) * u.factor, u.symbol) +
+                      (st.accepted.value_or(true) ? "" : " (withdrawn)"));
     }
     return out;
 }
@@ -165,7 +160,7 @@ std::vector<std::string> result_lines(std::string_view kind, std::string_view pa
         if (kind == acq::kSsmResultKind) return ssm_lines(payload_json);
         if (kind == acq::kOrientationResultKind) return orientation_lines(payload_json, machine);
         if (kind == storage::kIdentificationResultKind) return identification_lines(payload_json);
-        if (kind == "discovery") return discovery_lines(j);
+        if (kind == storage::kDiscoveryResultKind) return discovery_lines(std::string(payload_json));
         if (kind == storage::kCompensationResultKind) return compensation_lines(std::string(payload_json));
         if (kind == "instrument") return instrument_lines(j);
         if (kind == "acquisition.plan") return {};  // the plan: `sessions show --json`

@@ -10,6 +10,7 @@
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/types.hpp"
 #include "ballbar/storage/compensation_codec.hpp"
+#include "ballbar/storage/discovery_codec.hpp"
 #include "ballbar/storage/identification_codec.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "circular.hpp"
@@ -36,33 +37,12 @@ std::optional<double> opt_num(std::string_view kind, const json& j, const char* 
     if (!v->is_number()) bad(kind, key, "must be a number");
     return v->get<double>();
 }
-double num(std::string_view kind, const json& j, const char* key) {
-    const auto v = opt_num(kind, j, key);
-    if (!v) bad(kind, key, "is missing");
-    return *v;
-}
 std::string opt_str(std::string_view kind, const json& j, const char* key) {
     const json* v = find(j, key);
     if (!v) return {};
     if (!v->is_string()) bad(kind, key, "must be a string");
     return v->get<std::string>();
 }
-std::vector<double> nums(std::string_view kind, const json& j, const char* key) {
-    std::vector<double> out;
-    const json* v = find(j, key);
-    if (!v) return out;
-    if (!v->is_array()) bad(kind, key, "must be an array of numbers");
-    for (const auto& x : *v) {
-        if (x.is_null())
-            out.push_back(std::nan(""));
-        else if (x.is_number())
-            out.push_back(x.get<double>());
-        else
-            bad(kind, key, "must be an array of numbers");
-    }
-    return out;
-}
-
 // The procedure's results are read by their codec (acquisition/result_codec.hpp): strict, one owner.
 void add_ssm(Report& r, const json& p) {
     const acquisition::LocationResult x = acquisition::location_from_json(p.dump());
@@ -160,127 +140,105 @@ VariableInfo variable_info(const std::string& v) {
     return {v, "", 1};
 }
 
-/// The binned residual trend against `variable` from a list of {variable, bin_centre, bin_mean_um}.
-bool trend_of(std::string_view kind, const json* trends, const std::string& variable, std::vector<double>& x,
-              std::vector<double>& y_um) {
-    if (!trends || !trends->is_array()) return false;
-    for (const auto& t : *trends) {
-        if (opt_str(kind, t, "variable") != variable) continue;
-        x = nums(kind, t, "bin_centre");
-        y_um = nums(kind, t, "bin_mean_um");
-        return !x.empty() && x.size() == y_um.size();
-    }
-    return false;
+/// The binned residual trend against `variable` among a run's trends.
+const storage::DiscoveryTrend* trend_of(const std::vector<storage::DiscoveryTrend>& trends,
+                                        const std::string& variable) {
+    for (const auto& t : trends)
+        if (t.variable == variable) return t.x.empty() || t.x.size() != t.before_um.size() ? nullptr : &t;
+    return nullptr;
 }
 
-void add_discovery(Report& r, std::string_view kind, const json& p) {
-    const json* steps = find(p, "steps");
-    if (!steps || !steps->is_array()) bad(kind, "steps", "must be an array");
-    const json* details = find(p, "details");
-    const json* step_trends = details ? find(*details, "step_trends") : nullptr;
-    std::size_t index = 0;
-    for (const auto& s : *steps) {
-        const std::size_t step_index = index++;
+void add_discovery(Report& r, const json& p) {
+    storage::DiscoveryRecord rec;
+    try {
+        rec = storage::discovery_from_json(p.dump());
+    } catch (const storage::FormatError& e) {
+        throw ReportError(e.what());
+    }
+    for (std::size_t step_index = 0; step_index < rec.steps.size(); ++step_index) {
+        const storage::DiscoveryStepRecord& s = rec.steps[step_index];
         DiscoveryStep d;
-        d.effect = opt_str(kind, s, "effect");
-        if (const std::string iso = opt_str(kind, s, "iso"); !iso.empty()) d.effect += " (" + iso + ")";
-        if (find(s, "x")) {  // per-reading residuals against the variable, before and after the step
-            d.variable = opt_str(kind, s, "variable");
-            d.variable_unit = opt_str(kind, s, "variable_unit");
-            d.x = nums(kind, s, "x");
-            for (double v : nums(kind, s, "before_mm")) d.before_um.push_back(v * 1000);
-            for (double v : nums(kind, s, "after_mm")) d.after_um.push_back(v * 1000);
-            if (d.before_um.size() != d.x.size() || d.after_um.size() != d.x.size())
-                bad(kind, "x", "must have as many values as before_mm and after_mm");
+        d.effect = s.effect;
+        if (!s.iso.empty()) d.effect += " (" + s.iso + ")";
+        if (s.per_reading) {  // per-reading residuals against the variable, before and after the step
+            d.variable = s.variable;
+            d.variable_unit = s.variable_unit;
+            d.x = s.x;
+            d.before_um = s.before_um;
+            d.after_um = s.after_um;
         } else {  // `ballbar discover`: binned trends, the step's own or (older results) the whole run's
-            const std::string v = opt_str(kind, s, "explained_by");
-            const VariableInfo vi = variable_info(v);
+            const VariableInfo vi = variable_info(s.explained_by);
             d.variable = vi.label;
             d.variable_unit = vi.unit;
-            if (step_trends && step_trends->is_array() && step_index < step_trends->size()) {
-                const json& t = (*step_trends)[step_index];
-                std::vector<double> x = nums(kind, t, "bin_centre");
-                std::vector<double> before = nums(kind, t, "before_um"), after = nums(kind, t, "after_um");
-                const bool own_units = find(t, "x_unit") != nullptr;  // a learned term: display units already
-                if (own_units) {
-                    d.variable = opt_str(kind, t, "variable");
-                    d.variable_unit = opt_str(kind, t, "x_unit");
-                    d.y_label = opt_str(kind, t, "y_label");
-                    d.y_unit = opt_str(kind, t, "y_unit");
+            if (step_index < rec.step_trends.size()) {
+                const storage::DiscoveryTrend& t = rec.step_trends[step_index];
+                if (t.x_unit) {  // a learned term: display units already
+                    d.variable = t.variable;
+                    d.variable_unit = *t.x_unit;
+                    d.y_label = t.y_label;
+                    d.y_unit = t.y_unit;
                 }
-                if (!x.empty() && before.size() == x.size() && after.size() == x.size()) {
-                    if (!own_units)
-                        for (double& xv : x) xv *= vi.factor;
-                    d.x = std::move(x);
-                    d.before_um = std::move(before);
-                    d.after_um = std::move(after);
+                if (!t.x.empty() && t.before_um.size() == t.x.size() && t.after_um.size() == t.x.size()) {
+                    d.x = t.x;
+                    if (!t.x_unit)
+                        for (double& xv : d.x) xv *= vi.factor;
+                    d.before_um = t.before_um;
+                    d.after_um = t.after_um;
                     d.binned = true;
                     d.own_step = true;
                 }
             }
-            std::vector<double> xb, yb, xa, ya;
-            const json* initial = details ? find(*details, "residuals_initial") : nullptr;
-            const json* final_ = details ? find(*details, "residuals_final") : nullptr;
-            if (!d.binned && trend_of(kind, initial, v, xb, yb) && trend_of(kind, final_, v, xa, ya) &&
-                xa.size() == xb.size()) {
-                for (double& x : xb) x *= vi.factor;
-                d.x = xb;
-                d.before_um = yb;
-                d.after_um = ya;
+            const storage::DiscoveryTrend* before = trend_of(rec.residuals_initial, s.explained_by);
+            const storage::DiscoveryTrend* after = trend_of(rec.residuals_final, s.explained_by);
+            if (!d.binned && before && after && after->x.size() == before->x.size()) {
+                d.x = before->x;
+                for (double& x : d.x) x *= vi.factor;
+                d.before_um = before->before_um;
+                d.after_um = after->before_um;
                 d.binned = true;
             }
         }
-        if (const auto v = opt_num(kind, s, "rms_before_mm")) d.rms_before_um = *v * 1000;
-        if (const auto v = opt_num(kind, s, "rms_after_mm")) d.rms_after_um = *v * 1000;
-        if (const auto v = opt_num(kind, s, "rms_before_um")) d.rms_before_um = *v;
-        if (const auto v = opt_num(kind, s, "rms_after_um")) d.rms_after_um = *v;
-        if (const json* a = find(s, "accepted"); a && a->is_boolean())
-            d.accepted = a->get<bool>();
-        else if (!find(s, "x"))
-            d.accepted = true;  // the workflow lists the effects it added
-        d.note = opt_str(kind, s, "note");
-        if (d.note.empty()) d.note = opt_str(kind, s, "where");
-        if (opt_str(kind, s, "kind") == "empirical") d.effect += " (learned)";
-        // docs/cli.md's vocabulary (value, value_std), or as results were stored before it (estimate, stderr).
-        const bool before_vocabulary = find(s, "estimate") != nullptr;
-        if (d.note.empty() && opt_str(kind, s, "kind") != "empirical" && (before_vocabulary || find(s, "value"))) {
-            const auto [factor, unit] = display_unit(opt_str(kind, s, "unit"));
+        if (s.rms_before_um) d.rms_before_um = *s.rms_before_um;
+        if (s.rms_after_um) d.rms_after_um = *s.rms_after_um;
+        d.accepted = s.accepted.value_or(!s.per_reading);  // the workflow lists the effects it added
+        d.note = !s.note.empty() ? s.note : s.where;
+        if (s.kind == "empirical") d.effect += " (learned)";
+        if (d.note.empty() && s.kind != "empirical" && s.value) {
+            const auto [factor, unit] = display_unit(s.unit);
             char buf[96];
-            std::snprintf(
-                buf, sizeof buf, "%.4g ± %.2g %s", num(kind, s, before_vocabulary ? "estimate" : "value") * factor,
-                opt_num(kind, s, before_vocabulary ? "stderr" : "value_std").value_or(0) * factor, unit.c_str());
+            std::snprintf(buf, sizeof buf, "%.4g ± %.2g %s", *s.value * factor, s.value_std.value_or(0) * factor,
+                          unit.c_str());
             d.note = buf;
         }
         r.discovery.push_back(d);
     }
     // The noise floor and the verdicts (`ballbar discover` since the search beyond the library).
-    if (const json* f = find(p, "noise_floor_um"); f && f->is_number()) {
+    if (rec.noise_floor_um) {
         char buf[200];
-        std::snprintf(buf, sizeof buf, "Noise floor %.3f µm (%s).", f->get<double>(),
-                      opt_str(kind, p, "noise_source").c_str());
+        std::snprintf(buf, sizeof buf, "Noise floor %.3f µm (%s).", *rec.noise_floor_um,
+                      rec.noise_source.value_or("").c_str());
         r.discovery_notes.emplace_back(buf);
-    } else if (find(p, "noise_source")) {
+    } else if (rec.noise_source) {
         r.discovery_notes.emplace_back("Noise floor unknown: whether the residual is noise cannot be decided.");
     }
-    for (const char* key : {"verdict_before_search", "verdict"}) {
-        const json* v = find(p, key);
-        if (!v || !v->is_object()) continue;
+    for (const auto* v : {&rec.verdict_before_search, &rec.verdict}) {
+        if (!*v) continue;
+        const bool final = v == &rec.verdict;
+        const storage::DiscoveryVerdict& x = **v;
         char buf[240];
-        if (const auto ratio = opt_num(kind, *v, "ratio"))
+        if (x.ratio)
             std::snprintf(buf, sizeof buf,
                           "%s: residual RMS %.3f µm = %.2f× the floor: %s (χ² %.1f on %.0f dof, p = %.3g).",
-                          std::string_view(key) == "verdict" ? "Final" : "Before the search beyond the library",
-                          opt_num(kind, *v, "rms_um").value_or(0), *ratio, opt_str(kind, *v, "result").c_str(),
-                          opt_num(kind, *v, "chi2").value_or(0), opt_num(kind, *v, "dof").value_or(0),
-                          opt_num(kind, *v, "p_value").value_or(1));
+                          final ? "Final" : "Before the search beyond the library", x.rms_um.value_or(0), *x.ratio,
+                          x.result.c_str(), x.chi2.value_or(0), x.dof.value_or(0), x.p_value.value_or(1));
         else
             std::snprintf(buf, sizeof buf, "%s: residual RMS %.3f µm (%s).",
-                          std::string_view(key) == "verdict" ? "Final" : "Before the search beyond the library",
-                          opt_num(kind, *v, "rms_um").value_or(0), opt_str(kind, *v, "result").c_str());
+                          final ? "Final" : "Before the search beyond the library", x.rms_um.value_or(0),
+                          x.result.c_str());
         r.discovery_notes.emplace_back(buf);
     }
-    if (const std::string u = opt_str(kind, p, "unlocated"); !u.empty())
-        r.discovery_notes.push_back("Unexplained structure not located: " + u + ".");
+    if (!rec.unlocated.empty())
+        r.discovery_notes.push_back("Unexplained structure not located: " + rec.unlocated + ".");
 }
 
 void add_compensation(Report& r, const json& p) {
@@ -322,7 +280,7 @@ bool add_known_result(Report& report, std::string_view kind, const nlohmann::jso
     else if (kind == storage::kIdentificationResultKind)
         add_identification(report, payload);
     else if (kind == "discovery")
-        add_discovery(report, kind, payload);
+        add_discovery(report, payload);
     else if (kind == "compensation")
         add_compensation(report, payload);
     else if (kind == "procedure" || kind == "acquisition.transition")
