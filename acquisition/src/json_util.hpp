@@ -9,6 +9,7 @@
 
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/fileio/json_fields.hpp"
 
 namespace ballbar::acquisition::detail {
 
@@ -30,14 +31,10 @@ inline double get_number(const nlohmann::json& j, const std::string& key, const 
 /// did not ask for. `what` names the file and the object ("machine file", "plan file: capture").
 inline void only_keys(const nlohmann::json& j, const std::string& what,
                       std::initializer_list<std::string_view> allowed) {
-    for (const auto& item : j.items()) {
-        bool known = false;
-        for (const std::string_view k : allowed) known = known || item.key() == k;
-        if (known) continue;
-        std::string list;
-        for (const std::string_view k : allowed) list.append(list.empty() ? "" : ", ").append(k);
-        throw PlanError(what + ": unknown key \"" + item.key() + "\" (known: " + list + ")");
-    }
+    const auto refuse = [](const std::string& where, const std::string& problem) {
+        throw PlanError(where + ": " + problem);
+    };
+    fileio::JsonFields<nlohmann::json, decltype(refuse)>(j, what, refuse).only_known(allowed);
 }
 
 /// `value` finite and in [lo, hi], or PlanError naming the field ("plan file: dwell_s = 1e+308 is outside ...").

@@ -4,13 +4,13 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 
 #include "ballbar/analysis/limits.hpp"
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/fileio/input.hpp"
+#include "ballbar/fileio/json_fields.hpp"
 
 namespace ballbar::device {
 
@@ -22,11 +22,14 @@ namespace {
     throw std::invalid_argument("emulator config: " + key + ": " + what);
 }
 
-void only_keys(const json& obj, const std::string& where, const std::set<std::string>& allowed) {
+/// Refuses a key not in `allowed` (fileio/json_fields.hpp): `emulator config: machine: unknown key "x"
+/// (known: …)`.
+void only_keys(const json& obj, const std::string& where, std::initializer_list<std::string_view> allowed) {
     if (!obj.is_object()) fail(where, "must be an object");
-    for (const auto& [k, v] : obj.items()) {
-        if (!allowed.count(k)) fail(where.empty() ? k : where + "." + k, "unknown key");
-    }
+    const auto refuse = [](const std::string& path, const std::string& problem) {
+        throw std::invalid_argument("emulator config: " + (path.empty() ? problem : path + ": " + problem));
+    };
+    fileio::JsonFields<json, decltype(refuse)>(obj, where, refuse).only_known(allowed);
 }
 
 double num(const json& obj, const std::string& where, const char* key, double fallback) {
@@ -213,13 +216,13 @@ void parse_faults(const json& j, FaultConfig& f) {
 // "continuous": the continuous machine's errors, per axis {"X", "Y", "Z"}, per plane {"XY", "YZ", "ZX"}.
 void parse_continuous(const json& j, ContinuousErrors& e) {
     const std::string w = "continuous";
-    static const std::set<std::string> per_axis = {"servo_lag_ms", "backlash_um",     "reversal_spike_um", "scale_ppm",
-                                                   "cyclic_um",    "cyclic_pitch_mm", "cyclic_phase_deg"};
-    std::set<std::string> allowed = per_axis;
-    allowed.insert(
-        {"squareness_um_per_m", "straightness_um_per_m2", "vibration_um", "vibration_hz", "vibration_phase_deg"});
-    only_keys(j, w, allowed);
-    for (const auto& key : per_axis) {
+    static constexpr const char* per_axis[] = {"servo_lag_ms", "backlash_um",     "reversal_spike_um", "scale_ppm",
+                                               "cyclic_um",    "cyclic_pitch_mm", "cyclic_phase_deg"};
+    only_keys(j, w,
+              {"servo_lag_ms", "backlash_um", "reversal_spike_um", "scale_ppm", "cyclic_um", "cyclic_pitch_mm",
+               "cyclic_phase_deg", "squareness_um_per_m", "straightness_um_per_m2", "vibration_um", "vibration_hz",
+               "vibration_phase_deg"});
+    for (const std::string key : per_axis) {
         if (!j.contains(key)) continue;
         const std::string wk = w + "." + key;
         only_keys(j.at(key), wk, {"X", "Y", "Z"});

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/fileio/json_fields.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
 namespace ballbar::storage {
@@ -29,6 +30,11 @@ ba::NcOffsetTable offsets_from_json(std::string_view text) {
             throw FormatError(field + " " + why);
         return v.get<double>();
     };
+    const auto refuse = [](const std::string& where, const std::string& problem) {
+        throw FormatError(where.empty() ? problem : where + ": " + problem);
+    };
+    using Fields = fileio::JsonFields<json, decltype(refuse)>;
+    Fields(j, "", refuse).only_known({"format", "work_offsets", "tools", "measured_tool_length_mm"});
     ba::NcOffsetTable t;
     for (const auto& item : j.items()) {
         const std::string& key = item.key();
@@ -44,6 +50,8 @@ ba::NcOffsetTable offsets_from_json(std::string_view text) {
                 if (std::find(std::begin(names), std::end(names), w.key()) == std::end(names))
                     throw FormatError("work_offsets." + w.key() + ": not G54–G59 or G59.1–G59.3");
                 if (!w.value().is_object()) throw FormatError("work_offsets." + w.key() + " must be an object");
+                Fields(w.value(), "work_offsets." + w.key(), refuse)
+                    .only_known({"X_mm", "Y_mm", "Z_mm", "A_deg", "B_deg", "C_deg"});
                 ba::Pose p;
                 for (const auto& a : w.value().items()) {
                     const std::string f = "work_offsets." + w.key() + "." + a.key();
@@ -58,10 +66,8 @@ ba::NcOffsetTable offsets_from_json(std::string_view text) {
                         p.A_rad = ba::deg_to_rad(v);
                     else if (a.key() == "B_deg")
                         p.B_rad = ba::deg_to_rad(v);
-                    else if (a.key() == "C_deg")
+                    else  // C_deg: the keys are known
                         p.C_rad = ba::deg_to_rad(v);
-                    else
-                        throw FormatError(f + ": unknown (X_mm Y_mm Z_mm A_deg B_deg C_deg)");
                 }
                 t.work[w.key()] = p;
             }
@@ -76,8 +82,6 @@ ba::NcOffsetTable offsets_from_json(std::string_view text) {
                     throw FormatError("tools." + k + " must be {\"length_mm\": L}");
                 t.tool_length_mm[std::stoi(k)] = number(tl.value()["length_mm"], "tools." + k + ".length_mm");
             }
-        } else {
-            throw FormatError(key + ": unknown field (work_offsets, tools, measured_tool_length_mm)");
         }
     }
     return t;

@@ -14,6 +14,7 @@
 #include "ballbar/analysis/decimal_text.hpp"
 #include "ballbar/analysis/limits.hpp"
 #include "ballbar/fileio/input.hpp"
+#include "ballbar/fileio/json_fields.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/sqlite.hpp"
 #include "shortest.hpp"
@@ -53,16 +54,12 @@ double need_number(const ojson& j, const char* key) {
 }
 
 /// A key of a test header object that the format does not have is refused: a misspelt key would
-/// otherwise describe a test that was not run.
+/// otherwise describe a test that was not run. `where`: "" or "runs[0]: ".
 void only_keys(const ojson& j, const std::string& where, std::initializer_list<std::string_view> allowed) {
-    for (const auto& item : j.items()) {
-        bool known = false;
-        for (const std::string_view k : allowed) known = known || item.key() == k;
-        if (known) continue;
-        std::string list;
-        for (const std::string_view k : allowed) list.append(list.empty() ? "" : ", ").append(k);
-        throw std::runtime_error(where + "unknown key \"" + item.key() + "\" (known: " + list + ")");
-    }
+    const auto refuse = [&where](const std::string&, const std::string& problem) {
+        throw std::runtime_error(where + problem);
+    };
+    fileio::JsonFields<ojson, decltype(refuse)>(j, "", refuse).only_known(allowed);
 }
 
 /// A number column's range (docs/formats/trace.md, "Ranges").

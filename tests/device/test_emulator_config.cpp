@@ -56,7 +56,11 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"stall_negative", R"({"faults": {"stall_s": -5}})", "faults.stall_s = -5"},
         Case{"disconnect_at_1e308", R"({"faults": {"disconnect_at_s": 1e308}})", "faults.disconnect_at_s"},
         Case{"start_delay_1e308", R"({"faults": {"start_delay_s": 1e308}})", "faults.start_delay_s"},
-        Case{"drop_probability_2", R"({"faults": {"drop_frame_probability": 2}})", "faults.drop_frame_probability"}),
+        Case{"drop_probability_2", R"({"faults": {"drop_frame_probability": 2}})", "faults.drop_frame_probability"},
+        Case{"unknown_key", R"({"seeed": 1})", "emulator config: unknown key \"seeed\" (known: seed, time"},
+        Case{"unknown_machine_key", R"({"machine": {"sockt_mm": [0, 0, 0]}})", "machine: unknown key \"sockt_mm\""},
+        Case{"unknown_axis_key", R"({"continuous": {"backlash_um": {"W": 1}}})",
+             "continuous.backlash_um: unknown key \"W\" (known: X, Y, Z)"}),
     [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(EmulatorConfig, TheProjectsOwnConfigurationsStayValid) {

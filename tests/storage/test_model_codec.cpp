@@ -139,11 +139,11 @@ TEST(OffsetsCodec, RefusesWhatTheFormatDoesNotAllowNamingTheKey) {
     } cases[] = {
         {R"({"format": "ballbar-nc-offsets/2"})", "is not ballbar-nc-offsets/1"},
         {R"({"work_offsets": {"G60": {}}})", "work_offsets.G60: not G54"},
-        {R"({"work_offsets": {"G54": {"U_mm": 1}}})", "work_offsets.G54.U_mm: unknown"},
+        {R"({"work_offsets": {"G54": {"U_mm": 1}}})", "work_offsets.G54: unknown key \"U_mm\""},
         {R"({"work_offsets": {"G54": {"X_mm": 1e9}}})", "work_offsets.G54.X_mm"},
         {R"({"tools": {"T1": {"length_mm": 1}}})", "tools.T1: the key must be a tool number"},
         {R"({"tools": {"1": {"length_mm": 1, "radius_mm": 2}}})", "tools.1 must be"},
-        {R"({"offsets": {}})", "offsets: unknown field"},
+        {R"({"offsets": {}})", "unknown key \"offsets\" (known: format, work_offsets"},
         {R"([1, 2])", "must be a JSON object"},
     };
     for (const auto& c : cases) {

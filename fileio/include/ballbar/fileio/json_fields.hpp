@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
 // The helper of the strict readers of JSON documents: each field is checked for its type and range, an
 // unknown key is refused, and every error names the key. The stored model, the procedure's results,
-// identify's and compensate's results and the `solve` requests read through it; the offsets table, the
-// trace header, the emulator configuration and the machine and plan files still have their own small
-// checks (issue 25, item 3). A reader
+// identify's and compensate's results and the `solve` requests read through it; the trace header, the
+// emulator configuration and the machine and plan files refuse their unknown keys through it
+// (only_known) and keep their own few type checks. A reader
 // gives its own `fail`, which throws its own error type with its own prefix; the checks are these.
 // Works on any nlohmann::basic_json (json, ordered_json).
 #pragma once
@@ -43,6 +43,18 @@ class JsonFields {
             if (list)
                 for (std::string_view k : keys) known.append(known.empty() ? " (known: " : ", ").append(k);
             refuse(item.key(), "is not a key it has" + (list ? known + ")" : ""));
+        }
+    }
+    /// Refuses a key that is not one of `keys`, blaming the object itself (its path, "" for the
+    /// document): `unknown key "speed" (known: direction, start_deg, …)`. The form the trace header, the
+    /// machine, plan and emulator files and the offsets table use.
+    void only_known(std::initializer_list<std::string_view> keys) const {
+        for (const auto& item : j_.items()) {
+            if (std::find(keys.begin(), keys.end(), item.key()) != keys.end()) continue;
+            std::string known;
+            for (std::string_view k : keys) known.append(known.empty() ? "" : ", ").append(k);
+            fail_(where_, "unknown key \"" + item.key() + "\" (known: " + known + ")");
+            std::abort();  // unreachable: a fail throws
         }
     }
     bool has(const char* key) const { return j_.contains(key); }
