@@ -190,9 +190,9 @@ CircularMeasureResult measure_circular(storage::Store& store, const PreparedCirc
     else
         sink_storage.emplace(store, CircularStoreSink::Create(create), out.test.radius_mm);
     CircularStoreSink& sink = *sink_storage;
-    DeviceSource source(device_opener(uri, o.open_transport));
-    source.on_identified = [&sink](const device::InstrumentInfo& info) { sink.identified(info); };
-    const auto gauge = o.open_transport ? nullptr : make_gauge_source(uri, out.test.radius_mm);  // gauge_source.hpp
+    const OpenedSource opened = open_source(uri, out.test.radius_mm, o.open_transport);
+    if (opened.ballbar)
+        opened.ballbar->on_identified = [&sink](const device::InstrumentInfo& info) { sink.identified(info); };
     acq::CircularOptions options;
     options.stop = o.stop;
     options.dwell_s = prepared.dwell_s;
@@ -203,11 +203,11 @@ CircularMeasureResult measure_circular(storage::Store& store, const PreparedCirc
         if (o.on_test_fitted) o.on_test_fitted(fitted);
     };
     const std::uint64_t first_seq = prepared.session ? store.next_seq(*prepared.session) : 0;
-    acq::CircularSession session(out.test, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
+    acq::CircularSession session(out.test, opened.source(), sink, op, options);
     out.summary = session.run();
     sink.finish(out.summary);
     out.session_id = sink.id();
-    if (gauge && out.session_id) store_gauge_instrument(store, *out.session_id, *gauge, first_seq);
+    if (opened.gauge && out.session_id) store_gauge_instrument(store, *out.session_id, *opened.gauge, first_seq);
     if (out.summary.final_state == acq::State::Done && out.session_id)
         out.stored = analyze_stored_circular(store, *out.session_id);
     return out;

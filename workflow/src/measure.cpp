@@ -54,19 +54,18 @@ acq::SessionSummary measure_ssm(storage::Store& store, const PreparedSession& pr
     const std::int64_t id = prepared.id;
     const acq::Plan& plan = prepared.plan;
     const std::string uri = o.device_uri;
-    DeviceSource source(device_opener(uri, o.open_transport));
-    source.on_identified = [&store, id, &plan, &o](const device::InstrumentInfo& info) {
-        store.set_instrument(id, stored_instrument(info));  // sessions show, the report
-        const std::string mismatch = acq::bar_length_mismatch(plan.spec.bar_length_mm, info.calibrated_length_mm,
-                                                              plan.spec.capture.tolerance_mm, o.plan_file);
-        if (!mismatch.empty()) throw acq::InstrumentUnfit(mismatch);
-    };
+    const OpenedSource opened = open_source(uri, plan.spec.bar_length_mm, o.open_transport);
+    if (opened.ballbar)
+        opened.ballbar->on_identified = [&store, id, &plan, &o](const device::InstrumentInfo& info) {
+            store.set_instrument(id, stored_instrument(info));  // sessions show, the report
+            const std::string mismatch = acq::bar_length_mismatch(plan.spec.bar_length_mm, info.calibrated_length_mm,
+                                                                  plan.spec.capture.tolerance_mm, o.plan_file);
+            if (!mismatch.empty()) throw acq::InstrumentUnfit(mismatch);
+        };
     StoreSink sink(store, id, plan);
     acq::SessionOptions options;
     options.stop = o.stop;
-    const auto gauge =
-        o.open_transport ? nullptr : make_gauge_source(uri, plan.spec.bar_length_mm);  // (gauge_source.hpp)
-    acq::Session session(plan, gauge ? *gauge : static_cast<acq::SampleSource&>(source), sink, op, options);
+    acq::Session session(plan, opened.source(), sink, op, options);
     try {
         session.restore(prepared.done);
     } catch (const acq::PlanError& e) {  // as in resume_ssm_session: the stored data's fault
@@ -75,7 +74,7 @@ acq::SessionSummary measure_ssm(storage::Store& store, const PreparedSession& pr
     const std::uint64_t first_seq = store.next_seq(id);  // this run's samples (a resume continues after)
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);
-    if (gauge) store_gauge_instrument(store, id, *gauge, first_seq);  // identity, resolution, rate
+    if (opened.gauge) store_gauge_instrument(store, id, *opened.gauge, first_seq);  // identity, resolution, rate
     return sum;
 }
 

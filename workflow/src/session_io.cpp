@@ -285,6 +285,13 @@ std::vector<acq::CapturedPoint> load_points(storage::Store& store, std::int64_t 
     return out;
 }
 
+OpenedSource open_source(const std::string& uri, double calibrated_length_mm, DeviceSource::Opener override) {
+    OpenedSource out;
+    if (!override) out.gauge = make_gauge_source(uri, calibrated_length_mm);
+    if (!out.gauge) out.ballbar = std::make_unique<DeviceSource>(device_opener(uri, std::move(override)));
+    return out;
+}
+
 DeviceSource::Opener device_opener(std::string uri, DeviceSource::Opener override) {
     return [uri = std::move(uri), open = std::move(override)]() -> std::unique_ptr<device::Transport> {
         if (open) return open();

@@ -15,6 +15,7 @@
 #include "ballbar/device/instrument.hpp"
 #include "ballbar/storage/sample_writer.hpp"
 #include "ballbar/storage/store.hpp"
+#include "ballbar/workflow/gauge_source.hpp"
 
 namespace ballbar::workflow {
 
@@ -55,6 +56,21 @@ class DeviceSource : public acquisition::SampleSource {
 /// and demos), else the URI's transport; a URI that names no transport is a SourceError (the session says
 /// so as a link failure).
 DeviceSource::Opener device_opener(std::string uri, DeviceSource::Opener override = {});
+
+/// The instrument a session measures with, as the acquisition's sample source: a digital gauge for a
+/// gauge URI (sylvac:, mitutoyo-itn:, digimatic:, modbus:; docs/instruments.md), else the ball-bar's
+/// driver over the URI's transport (or `override`: an emulator in process).
+struct OpenedSource {
+    std::unique_ptr<DeviceSource> ballbar;  ///< set for the ball-bar protocol
+    std::unique_ptr<GaugeSource> gauge;     ///< set for a gauge
+    acquisition::SampleSource& source() const {
+        return gauge ? static_cast<acquisition::SampleSource&>(*gauge) : *ballbar;
+    }
+};
+
+/// Opens nothing yet (the acquisition connects): chooses and builds the source for `uri`. A gauge is set up
+/// as a bar of `calibrated_length_mm`; `override` always means the ball-bar protocol.
+OpenedSource open_source(const std::string& uri, double calibrated_length_mm, DeviceSource::Opener override = {});
 
 /// Stores a session as it happens: samples through a SampleWriter, points, the fine-grained audit
 /// trail (the procedure's steps) and the results (kinds "acquisition.plan", "ssm", "orientation").
