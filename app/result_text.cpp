@@ -14,6 +14,7 @@
 #include "ballbar/storage/compensation_codec.hpp"
 #include "ballbar/storage/discovery_codec.hpp"
 #include "ballbar/storage/identification_codec.hpp"
+#include "ballbar/storage/instrument_result.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "figures.hpp"
 
@@ -23,10 +24,6 @@ namespace {
 namespace acq = ballbar::acquisition;
 namespace ba = ballbar::analysis;
 using nlohmann::json;
-
-double num(const json& j, const char* key, double fallback = 0) {
-    return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
-}
 
 /// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm" from mm: two significant digits of the smallest
 /// uncertainty fix the decimals (2 to 4).
@@ -129,11 +126,11 @@ std::vector<std::string> compensation_lines(const std::string& payload) {
     }
     return {line};
 }
-std::vector<std::string> instrument_lines(const json& j) {
+std::vector<std::string> instrument_lines(const std::string& payload) {
+    const storage::GaugeInstrumentRecord r = storage::gauge_instrument_from_json(payload);
     char buf[200];
-    std::snprintf(buf, sizeof buf, "%s %s, resolution %.4g µm, %.1f readings/s measured", j.value("maker", "").c_str(),
-                  j.value("model", j.value("kind", "")).c_str(), num(j, "resolution_mm") * 1e3,
-                  num(j, "reading_rate_hz"));
+    std::snprintf(buf, sizeof buf, "%s %s, resolution %.4g µm, %.1f readings/s measured", r.maker.c_str(),
+                  (r.model.empty() ? r.kind : r.model).c_str(), r.resolution_mm * 1e3, r.reading_rate_hz);
     return {buf};
 }
 
@@ -162,7 +159,7 @@ std::vector<std::string> result_lines(std::string_view kind, std::string_view pa
         if (kind == storage::kIdentificationResultKind) return identification_lines(payload_json);
         if (kind == storage::kDiscoveryResultKind) return discovery_lines(std::string(payload_json));
         if (kind == storage::kCompensationResultKind) return compensation_lines(std::string(payload_json));
-        if (kind == "instrument") return instrument_lines(j);
+        if (kind == storage::kInstrumentResultKind) return instrument_lines(std::string(payload_json));
         if (kind == "acquisition.plan") return {};  // the plan: `sessions show --json`
         return generic_lines(j);
     } catch (const json::exception&) {

@@ -5,6 +5,8 @@
 #include <sstream>
 #include <thread>
 
+#include "ballbar/storage/instrument_result.hpp"
+
 namespace ballbar::workflow {
 
 namespace acq = ballbar::acquisition;
@@ -102,31 +104,30 @@ bool GaugeSource::reconnect(std::chrono::milliseconds timeout) {
 }
 
 std::string GaugeSource::instrument_json() const {
-    nlohmann::json j;
+    storage::GaugeInstrumentRecord r;
     const gg::SamplerStats& st = stats();
     if (identity_) {
-        j["kind"] = gg::to_string(identity_->kind);
-        j["maker"] = identity_->maker;
-        j["model"] = identity_->model;
-        // Missing is null, not "" (docs/cli.md's vocabulary).
-        j["serial"] = identity_->serial.empty() ? nlohmann::json(nullptr) : nlohmann::json(identity_->serial);
-        j["firmware"] = identity_->firmware.empty() ? nlohmann::json(nullptr) : nlohmann::json(identity_->firmware);
-        j["inch"] = identity_->inch;
-        j["low_battery"] = identity_->low_battery;
+        r.kind = gg::to_string(identity_->kind);
+        r.maker = identity_->maker;
+        r.model = identity_->model;
+        if (!identity_->serial.empty()) r.serial = identity_->serial;
+        if (!identity_->firmware.empty()) r.firmware = identity_->firmware;
+        r.inch = identity_->inch;
+        r.low_battery = identity_->low_battery;
     }
-    j["uri"] = uri_;
-    j["resolution_mm"] = st.resolution_mm;
-    j["reading_rate_hz"] = st.rate_hz;
-    j["target_rate_hz"] = bar_.target_rate_hz;
-    j["calibrated_length_mm"] = bar_.calibrated_length_mm;
-    j["sign"] = bar_.sign < 0 ? -1 : 1;
-    j["readings"] = st.readings;
-    j["not_ready"] = st.not_ready;
-    j["out_of_range"] = st.out_of_range;
-    j["timeouts"] = st.timeouts;
-    j["invalid"] = st.invalid;
-    j["errors"] = st.errors;
-    return j.dump();
+    r.uri = uri_;
+    r.resolution_mm = st.resolution_mm;
+    r.reading_rate_hz = st.rate_hz;
+    r.target_rate_hz = bar_.target_rate_hz;
+    r.calibrated_length_mm = bar_.calibrated_length_mm;
+    r.sign = bar_.sign < 0 ? -1 : 1;
+    r.readings = st.readings;
+    r.not_ready = st.not_ready;
+    r.out_of_range = st.out_of_range;
+    r.timeouts = st.timeouts;
+    r.invalid = st.invalid;
+    r.errors = st.errors;
+    return storage::gauge_instrument_to_json(r);
 }
 
 std::unique_ptr<GaugeSource> make_gauge_source(const std::string& uri, double calibrated_length_mm) {
@@ -153,7 +154,8 @@ void store_gauge_instrument(storage::Store& store, std::int64_t session_id, cons
         in.calibrated_length_mm = source.bar().calibrated_length_mm;
         store.set_instrument(session_id, in);
     }
-    store.add_result(session_id, "instrument", source.instrument_json(), std::nullopt, "ballbar gauge/1");
+    store.add_result(session_id, std::string(storage::kInstrumentResultKind), source.instrument_json(), std::nullopt,
+                     "ballbar gauge/1");
     const gg::SamplerStats& st = source.stats();
     if (st.resolution_mm > 0 && st.rate_hz > 0)
         store.set_segment_instrument(session_id, first_seq, st.resolution_mm, st.rate_hz);
