@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ballbar/storage/machine_json.hpp"
+#include "stored_json.hpp"
 
 namespace ballbar::storage {
 
@@ -94,39 +95,11 @@ namespace {
 
 using json = nlohmann::json;
 
-[[noreturn]] void bad_circular(const std::string& key, const std::string& what) {
-    throw FormatError("result \"circular\": \"" + key + "\" " + what);
-}
-/// A key's value; null is absent.
-const json* find(const json& j, const char* key) {
-    if (!j.is_object()) return nullptr;
-    const auto it = j.find(key);
-    return it == j.end() || it->is_null() ? nullptr : &*it;
-}
-std::optional<double> opt_num(const json& j, const char* key, const std::string& where = {}) {
-    const json* v = find(j, key);
-    if (!v) return std::nullopt;
-    if (!v->is_number()) bad_circular(where + key, "must be a number");
-    return v->get<double>();
-}
-double num(const json& j, const char* key, const std::string& where = {}) {
-    const auto v = opt_num(j, key, where);
-    if (!v) bad_circular(where + key, "is missing");
-    return *v;
-}
-std::string str(const json& j, const char* key, const std::string& where = {}) {
-    const json* v = find(j, key);
-    if (!v) return {};
-    if (!v->is_string()) bad_circular(where + key, "must be a string");
-    return v->get<std::string>();
-}
-std::vector<std::string> strings(const json* list) {
-    std::vector<std::string> out;
-    if (list && list->is_array())
-        for (const auto& k : *list)
-            if (k.is_string()) out.push_back(k.get<std::string>());
-    return out;
-}
+using detail::find;
+using detail::num;
+using detail::opt_num;
+using detail::str;
+using detail::strings;
 
 /// The diagnostics as stored before the vocabulary: maps key → value (diagnostics, uncertainties,
 /// shares_percent) and the ranked keys in order (ranking).
@@ -150,9 +123,7 @@ std::vector<StoredCircularDiagnostic> diagnostics_from_maps(const json& p) {
     return out;
 }
 
-}  // namespace
-
-CircularRecord circular_result_from_json(std::string_view text) {
+CircularRecord read_circular(std::string_view text) {
     json p;
     try {
         p = json::parse(text);
@@ -162,7 +133,7 @@ CircularRecord circular_result_from_json(std::string_view text) {
     if (!p.is_object()) throw FormatError("result \"circular\" is not a JSON object");
     CircularRecord c;
     const json* test = find(p, "test");
-    if (!test || !test->is_object()) bad_circular("test", "must be an object");
+    if (!test || !test->is_object()) detail::bad_key("test", "must be an object");
     c.plane = str(*test, "plane", "test.");
     c.radius_mm = num(*test, "radius_mm", "test.");
     c.feed_mm_min = num(*test, "feed_mm_min", "test.");
@@ -172,7 +143,7 @@ CircularRecord circular_result_from_json(std::string_view text) {
             if ((*ctr)[i].is_number()) c.centre_mm[i] = (*ctr)[i].get<double>();
     const json* specs = find(*test, "runs");
     const json* runs = find(p, "runs");
-    if (!runs || !runs->is_array() || runs->empty()) bad_circular("runs", "must be a non-empty array");
+    if (!runs || !runs->is_array() || runs->empty()) detail::bad_key("runs", "must be a non-empty array");
     for (std::size_t i = 0; i < runs->size(); ++i) {
         const json& j = (*runs)[i];
         const std::string where = "runs[" + std::to_string(i) + "].";
@@ -258,6 +229,16 @@ CircularRecord circular_result_from_json(std::string_view text) {
     }
     if (const json* tol = find(p, "tolerance")) c.tolerance_um = opt_num(*tol, "circularity_um", "tolerance.");
     return c;
+}
+
+}  // namespace
+
+CircularRecord circular_result_from_json(std::string_view text) {
+    try {
+        return read_circular(text);
+    } catch (const detail::StoredKeyError& e) {
+        throw FormatError(std::string("result \"circular\": ") + e.what());
+    }
 }
 
 }  // namespace ballbar::storage

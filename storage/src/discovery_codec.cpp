@@ -9,6 +9,7 @@
 
 #include "ballbar/analysis/effects.hpp"
 #include "ballbar/storage/machine_json.hpp"
+#include "stored_json.hpp"
 
 namespace ballbar::storage {
 namespace {
@@ -190,42 +191,11 @@ namespace {
 
 using json = nlohmann::json;
 
-[[noreturn]] void bad_discovery(const std::string& key, const std::string& what) {
-    throw FormatError("result \"discovery\": \"" + key + "\" " + what);
-}
-const json* find(const json& j, const char* key) {
-    if (!j.is_object()) return nullptr;
-    const auto it = j.find(key);
-    return it == j.end() || it->is_null() ? nullptr : &*it;
-}
-std::optional<double> opt_num(const json& j, const char* key) {
-    const json* v = find(j, key);
-    if (!v) return std::nullopt;
-    if (!v->is_number()) bad_discovery(key, "must be a number");
-    return v->get<double>();
-}
-std::string opt_str(const json& j, const char* key) {
-    const json* v = find(j, key);
-    if (!v) return {};
-    if (!v->is_string()) bad_discovery(key, "must be a string");
-    return v->get<std::string>();
-}
-/// An array of numbers; null entries are empty bins (NaN).
-std::vector<double> nums(const json& j, const char* key) {
-    std::vector<double> out;
-    const json* v = find(j, key);
-    if (!v) return out;
-    if (!v->is_array()) bad_discovery(key, "must be an array of numbers");
-    for (const auto& x : *v) {
-        if (x.is_null())
-            out.push_back(std::nan(""));
-        else if (x.is_number())
-            out.push_back(x.get<double>());
-        else
-            bad_discovery(key, "must be an array of numbers");
-    }
-    return out;
-}
+using detail::find;
+using detail::nums;
+using detail::opt_num;
+using detail::str;
+
 std::vector<double> times(std::vector<double> v, double factor) {
     for (double& x : v) x *= factor;
     return v;
@@ -236,7 +206,7 @@ std::vector<DiscoveryTrend> residual_trends(const json* list) {
     if (!list || !list->is_array()) return out;
     for (const auto& t : *list) {
         DiscoveryTrend d;
-        d.variable = opt_str(t, "variable");
+        d.variable = str(t, "variable");
         d.x = nums(t, "bin_centre");
         d.before_um = nums(t, "bin_mean_um");
         out.push_back(std::move(d));
@@ -248,7 +218,7 @@ std::optional<DiscoveryVerdict> verdict_of(const json& p, const char* key) {
     const json* v = find(p, key);
     if (!v || !v->is_object()) return std::nullopt;
     DiscoveryVerdict d;
-    d.result = opt_str(*v, "result");
+    d.result = str(*v, "result");
     d.rms_um = opt_num(*v, "rms_um");
     d.ratio = opt_num(*v, "ratio");
     d.chi2 = opt_num(*v, "chi2");
@@ -257,9 +227,7 @@ std::optional<DiscoveryVerdict> verdict_of(const json& p, const char* key) {
     return d;
 }
 
-}  // namespace
-
-DiscoveryRecord discovery_from_json(std::string_view text) {
+DiscoveryRecord read_discovery(std::string_view text) {
     json p;
     try {
         p = json::parse(text);
@@ -269,13 +237,13 @@ DiscoveryRecord discovery_from_json(std::string_view text) {
     if (!p.is_object()) throw FormatError("result \"discovery\" is not a JSON object");
     DiscoveryRecord r;
     const json* steps = find(p, "steps");
-    if (!steps || !steps->is_array()) bad_discovery("steps", "must be an array");
+    if (!steps || !steps->is_array()) detail::bad_key("steps", "must be an array");
     for (const auto& s : *steps) {
         DiscoveryStepRecord d;
-        d.effect = opt_str(s, "effect");
-        d.iso = opt_str(s, "iso");
-        d.kind = opt_str(s, "kind");
-        d.unit = opt_str(s, "unit");
+        d.effect = str(s, "effect");
+        d.iso = str(s, "iso");
+        d.kind = str(s, "kind");
+        d.unit = str(s, "unit");
         // docs/cli.md's vocabulary (value, value_std), or as results were stored before it (estimate, stderr).
         d.value = find(s, "estimate") ? opt_num(s, "estimate") : opt_num(s, "value");
         d.value_std = find(s, "estimate") ? opt_num(s, "stderr") : opt_num(s, "value_std");
@@ -284,39 +252,39 @@ DiscoveryRecord discovery_from_json(std::string_view text) {
         if (const auto v = opt_num(s, "rms_before_um")) d.rms_before_um = *v;
         if (const auto v = opt_num(s, "rms_after_um")) d.rms_after_um = *v;
         if (const json* a = find(s, "accepted"); a && a->is_boolean()) d.accepted = a->get<bool>();
-        d.explained_by = opt_str(s, "explained_by");
-        d.where = opt_str(s, "where");
-        d.note = opt_str(s, "note");
+        d.explained_by = str(s, "explained_by");
+        d.where = str(s, "where");
+        d.note = str(s, "note");
         if (find(s, "x")) {
             d.per_reading = true;
-            d.variable = opt_str(s, "variable");
-            d.variable_unit = opt_str(s, "variable_unit");
+            d.variable = str(s, "variable");
+            d.variable_unit = str(s, "variable_unit");
             d.x = nums(s, "x");
             d.before_um = times(nums(s, "before_mm"), 1000);
             d.after_um = times(nums(s, "after_mm"), 1000);
             if (d.before_um.size() != d.x.size() || d.after_um.size() != d.x.size())
-                bad_discovery("x", "must have as many values as before_mm and after_mm");
+                detail::bad_key("x", "must have as many values as before_mm and after_mm");
         }
         r.steps.push_back(std::move(d));
     }
     r.rms_initial_um = opt_num(p, "rms_initial_um");
     r.rms_final_um = opt_num(p, "rms_final_um");
     r.noise_floor_um = opt_num(p, "noise_floor_um");
-    if (find(p, "noise_source")) r.noise_source = opt_str(p, "noise_source");
+    if (find(p, "noise_source")) r.noise_source = str(p, "noise_source");
     r.verdict_before_search = verdict_of(p, "verdict_before_search");
     r.verdict = verdict_of(p, "verdict");
-    r.unlocated = opt_str(p, "unlocated");
+    r.unlocated = str(p, "unlocated");
     if (const json* details = find(p, "details")) {
         if (const json* st = find(*details, "step_trends"); st && st->is_array()) {
             for (const auto& t : *st) {
                 DiscoveryTrend d;
-                d.variable = opt_str(t, "variable");
+                d.variable = str(t, "variable");
                 d.x = nums(t, "bin_centre");
                 d.before_um = nums(t, "before_um");
                 d.after_um = nums(t, "after_um");
-                if (find(t, "x_unit")) d.x_unit = opt_str(t, "x_unit");
-                d.y_label = opt_str(t, "y_label");
-                d.y_unit = opt_str(t, "y_unit");
+                if (find(t, "x_unit")) d.x_unit = str(t, "x_unit");
+                d.y_label = str(t, "y_label");
+                d.y_unit = str(t, "y_unit");
                 r.step_trends.push_back(std::move(d));
             }
         }
@@ -324,10 +292,20 @@ DiscoveryRecord discovery_from_json(std::string_view text) {
         r.residuals_final = residual_trends(find(*details, "residuals_final"));
     }
     if (const json* m = find(p, "model"); m && m->is_object()) {
-        r.model_name = opt_str(*m, "name");
+        r.model_name = str(*m, "name");
         if (const auto v = opt_num(*m, "version")) r.model_version = static_cast<int>(*v);
     }
     return r;
+}
+
+}  // namespace
+
+DiscoveryRecord discovery_from_json(std::string_view text) {
+    try {
+        return read_discovery(text);
+    } catch (const detail::StoredKeyError& e) {
+        throw FormatError(std::string("result \"discovery\": ") + e.what());
+    }
 }
 
 }  // namespace ballbar::storage
