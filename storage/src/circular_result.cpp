@@ -6,7 +6,6 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "ballbar/storage/machine_json.hpp"
 #include "stored_json.hpp"
 
 namespace ballbar::storage {
@@ -123,14 +122,7 @@ std::vector<StoredCircularDiagnostic> diagnostics_from_maps(const json& p) {
     return out;
 }
 
-CircularRecord read_circular(std::string_view text) {
-    json p;
-    try {
-        p = json::parse(text);
-    } catch (const json::exception& e) {
-        throw FormatError(std::string("result \"circular\" is not valid JSON: ") + e.what());
-    }
-    if (!p.is_object()) throw FormatError("result \"circular\" is not a JSON object");
+CircularRecord read_circular(const json& p) {
     CircularRecord c;
     const json* test = find(p, "test");
     if (!test || !test->is_object()) detail::bad_key("test", "must be an object");
@@ -234,11 +226,7 @@ CircularRecord read_circular(std::string_view text) {
 }  // namespace
 
 CircularRecord circular_result_from_json(std::string_view text) {
-    try {
-        return read_circular(text);
-    } catch (const detail::StoredKeyError& e) {
-        throw FormatError(std::string("result \"circular\": ") + e.what());
-    }
+    return detail::read_stored(text, "circular", read_circular);
 }
 
 }  // namespace ballbar::storage

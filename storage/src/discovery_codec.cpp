@@ -8,7 +8,6 @@
 #include <nlohmann/json.hpp>
 
 #include "ballbar/analysis/effects.hpp"
-#include "ballbar/storage/machine_json.hpp"
 #include "stored_json.hpp"
 
 namespace ballbar::storage {
@@ -227,14 +226,7 @@ std::optional<DiscoveryVerdict> verdict_of(const json& p, const char* key) {
     return d;
 }
 
-DiscoveryRecord read_discovery(std::string_view text) {
-    json p;
-    try {
-        p = json::parse(text);
-    } catch (const json::exception& e) {
-        throw FormatError(std::string("result \"discovery\" is not valid JSON: ") + e.what());
-    }
-    if (!p.is_object()) throw FormatError("result \"discovery\" is not a JSON object");
+DiscoveryRecord read_discovery(const json& p) {
     DiscoveryRecord r;
     const json* steps = find(p, "steps");
     if (!steps || !steps->is_array()) detail::bad_key("steps", "must be an array");
@@ -301,11 +293,7 @@ DiscoveryRecord read_discovery(std::string_view text) {
 }  // namespace
 
 DiscoveryRecord discovery_from_json(std::string_view text) {
-    try {
-        return read_discovery(text);
-    } catch (const detail::StoredKeyError& e) {
-        throw FormatError(std::string("result \"discovery\": ") + e.what());
-    }
+    return detail::read_stored(text, "discovery", read_discovery);
 }
 
 }  // namespace ballbar::storage

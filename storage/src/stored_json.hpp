@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Reading a stored result that went through several shapes (the circular and discovery results): a key
-// may be absent or null, both meaning absent; a key that is there must have its type. The reader catches
-// StoredKeyError and says which result it was reading (internal).
+// may be absent or null, both meaning absent; a key that is there must have its type. read_stored parses
+// the payload and says which result a refused key belongs to (internal).
 #pragma once
 
 #include <cmath>
@@ -9,7 +9,11 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
+
+#include "ballbar/storage/machine_json.hpp"
 
 namespace ballbar::storage::detail {
 
@@ -70,6 +74,25 @@ inline std::vector<std::string> strings(const nlohmann::json* list) {
         for (const auto& k : *list)
             if (k.is_string()) out.push_back(k.get<std::string>());
     return out;
+}
+
+/// `read(payload)` on the stored payload of a result of `kind`: FormatError when the text is not a JSON
+/// object, and a key the reader refuses (StoredKeyError) said as `result "kind": "key" what`.
+template <class Read>
+auto read_stored(std::string_view text, const std::string& kind, Read read)
+    -> decltype(read(std::declval<const nlohmann::json&>())) {
+    nlohmann::json payload;
+    try {
+        payload = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
+        throw FormatError("result \"" + kind + "\" is not valid JSON: " + e.what());
+    }
+    if (!payload.is_object()) throw FormatError("result \"" + kind + "\" is not a JSON object");
+    try {
+        return read(payload);
+    } catch (const StoredKeyError& e) {
+        throw FormatError("result \"" + kind + "\": " + e.what());
+    }
 }
 
 }  // namespace ballbar::storage::detail
