@@ -48,4 +48,10 @@ function(ballbar_module name)
   # so let the compiler inline and specialise calls within a file as it would without -fPIC (the
   # compensation and Jacobian hot paths depend on it).
   target_compile_options(${name} PRIVATE -fno-semantic-interposition ${BALLBAR_COVERAGE_FLAGS})
+  # Unity batches of four, as the CLI's and the tests' (CMakeLists.txt, BALLBAR_UNITY_BUILD): Eigen,
+  # nlohmann-json and fmt generate their inline code once a batch. GCC's subobject-linkage warning takes a
+  # type of one file's anonymous namespace, used by a class of that file, for one shared between
+  # translation units; in a unity batch it is neither.
+  set_target_properties(${name} PROPERTIES UNITY_BUILD ${BALLBAR_UNITY_BUILD} UNITY_BUILD_BATCH_SIZE 4)
+  target_compile_options(${name} PRIVATE $<$<CXX_COMPILER_ID:GNU>:-Wno-subobject-linkage>)
 endfunction()

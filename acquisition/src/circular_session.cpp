@@ -19,7 +19,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string fmt(double v, int digits) {
+std::string fixed_text(double v, int digits) {
     std::ostringstream os;
     os << std::fixed << std::setprecision(digits) << v;
     return os.str();
@@ -38,25 +38,25 @@ std::string circular_instrument_mismatch(const circ::TestSpec& test, const Instr
     const double R = test.radius_mm;
     const double range = status.range_mm.value_or(1.0);
     if (std::abs(R - L) > 0.5 * range)
-        return "the bar is calibrated at " + fmt(L, 3) + " mm but the test's radius is " + fmt(R, 3) +
-               " mm: plan the test with --radius " + fmt(L, 3) +
-               " (the bar's length) or fit the extension that makes " + fmt(R, 3) + " mm";
+        return "the bar is calibrated at " + fixed_text(L, 3) + " mm but the test's radius is " + fixed_text(R, 3) +
+               " mm: plan the test with --radius " + fixed_text(L, 3) +
+               " (the bar's length) or fit the extension that makes " + fixed_text(R, 3) + " mm";
     const double room = feed_in_room_mm(test, status, range);
     if (status.range_mm && test.feed_in_mm > room + 1e-6)  // (1 nm: rounding, not range)
-        return "the feed-in of " + fmt(test.feed_in_mm, 3) + " mm leaves the bar's ±" + fmt(range, 3) +
-               " mm range (the machine stands at " + fmt(R + test.feed_in_mm - L, 3) +
+        return "the feed-in of " + fixed_text(test.feed_in_mm, 3) + " mm leaves the bar's ±" + fixed_text(range, 3) +
+               " mm range (the machine stands at " + fixed_text(R + test.feed_in_mm - L, 3) +
                " mm from the calibrated length before it): plan the test with --feed-in " +
-               fmt(std::floor(room * 100.0) / 100.0, 2) + " or less";
+               fixed_text(std::floor(room * 100.0) / 100.0, 2) + " or less";
     if (status.sample_rate_hz > 0) {
         const circ::SamplingLimit lim = circ::sampling_limit(test, status.sample_rate_hz);
         if (test.feed_mm_min > lim.max_feed_mm_min * (1.0 + 1e-9)) {
             const double highest = std::floor(lim.max_feed_mm_min + 1e-6);
-            return "the feed of " + fmt(test.feed_mm_min, 0) + " mm/min is too fast for the instrument's " +
-                   fmt(status.sample_rate_hz, 1) + " readings/s: its samples would lie " +
-                   fmt(test.feed_mm_min / (60.0 * status.sample_rate_hz), 3) +
-                   " mm apart along the path and the diagnosis needs at most " + fmt(lim.max_spacing_mm, 3) + " mm (" +
-                   lim.binding + "); the highest usable feed is " + fmt(highest, 0) + " mm/min (plan with --feed " +
-                   fmt(highest, 0) + ")";
+            return "the feed of " + fixed_text(test.feed_mm_min, 0) + " mm/min is too fast for the instrument's " +
+                   fixed_text(status.sample_rate_hz, 1) + " readings/s: its samples would lie " +
+                   fixed_text(test.feed_mm_min / (60.0 * status.sample_rate_hz), 3) +
+                   " mm apart along the path and the diagnosis needs at most " + fixed_text(lim.max_spacing_mm, 3) +
+                   " mm (" + lim.binding + "); the highest usable feed is " + fixed_text(highest, 0) +
+                   " mm/min (plan with --feed " + fixed_text(highest, 0) + ")";
         }
     }
     return {};
@@ -99,8 +99,8 @@ void CircularSession::fit_feed_in() {
     const double range = *status_.range_mm;
     const double fitted = std::floor(feed_in_room_mm(test_, status_, range) * 20.0 + 1e-9) / 20.0;
     if (!(test_.feed_in_mm > fitted) || fitted < kMinFittedFeedIn_mm) return;  // fits, or the check refuses
-    op_.message("Feed-in " + fmt(fitted, 2) + " mm instead of " + fmt(test_.feed_in_mm, 2) +
-                " mm: the stand before each run stays within the bar's ±" + fmt(range, 3) +
+    op_.message("Feed-in " + fixed_text(fitted, 2) + " mm instead of " + fixed_text(test_.feed_in_mm, 2) +
+                " mm: the stand before each run stays within the bar's ±" + fixed_text(range, 3) +
                 " mm range (--feed-in sets it).");
     test_.feed_in_mm = fitted;
     sink_.on_test_fitted(test_);
@@ -293,11 +293,11 @@ bool CircularSession::attempt(int number) {
             if (broken > 0)
                 why += " has a restart of the instrument's clock in it";
             else if (long_holes > 0)
-                why += " has a hole of " + fmt(longest_s * 1e3, 0) + " ms in its stream (at most " +
-                       fmt(max_hole_s * 1e3, 0) + " ms can be bridged)";
+                why += " has a hole of " + fixed_text(longest_s * 1e3, 0) + " ms in its stream (at most " +
+                       fixed_text(max_hole_s * 1e3, 0) + " ms can be bridged)";
             else if (too_many)
                 why += " lost " + std::to_string(lost_in_run) + " of its " + std::to_string(last - first + 1) +
-                       " samples (at most " + fmt(options_.max_lost_fraction * 100, 1) + " % can be missing)";
+                       " samples (at most " + fixed_text(options_.max_lost_fraction * 100, 1) + " % can be missing)";
             else
                 why += " left the bar's range in " + std::to_string(beyond) + " samples";
             fire(Event::PointRejected, why);
@@ -310,8 +310,8 @@ bool CircularSession::attempt(int number) {
         r.first_seq = seqs[first];
         r.last_seq = seqs[last];
         a.runs.push_back(r);
-        fire(Event::PointCaptured, run_name(run) + " captured: feed-in ends at " + fmt(fi->command_end_s, 3) +
-                                       " s, lag " + fmt(fi->lag_s * 1e3, 1) + " ms");
+        fire(Event::PointCaptured, run_name(run) + " captured: feed-in ends at " + fixed_text(fi->command_end_s, 3) +
+                                       " s, lag " + fixed_text(fi->lag_s * 1e3, 1) + " ms");
         op_.message(run_name(run) + " captured.");
         from = last;
         fi.reset();
@@ -351,11 +351,12 @@ CircularSummary CircularSession::run() {
             end(Event::Fail, mismatch);
         }
         if (status_.battery_pct < 5)
-            end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
+            end(Event::Fail,
+                "battery at " + fixed_text(status_.battery_pct, 0) + " %: charge the bar before measuring");
         sink_.on_instrument_accepted(status_);
         if (!status_.referenced) link_->reference();
-        fire(Event::CheckPassed,
-             "bar " + fmt(status_.calibrated_length_mm, 3) + " mm, " + fmt(status_.sample_rate_hz, 0) + " readings/s");
+        fire(Event::CheckPassed, "bar " + fixed_text(status_.calibrated_length_mm, 3) + " mm, " +
+                                     fixed_text(status_.sample_rate_hz, 0) + " readings/s");
         std::ostringstream setup;
         setup << "Circular test in " << circ::plane_name(test_.plane) << ": mount the socket at the circle centre X"
               << test_.centre_mm[0] << " Y" << test_.centre_mm[1] << " Z" << test_.centre_mm[2]
@@ -386,9 +387,9 @@ CircularSummary CircularSession::run() {
             std::ostringstream review;
             review << "Circular deviation G:";
             for (const auto& r : summary_.result->runs)
-                review << " " << circ::direction_name(r.direction) << " " << fmt(r.circularity_um, 2) << " µm";
+                review << " " << circ::direction_name(r.direction) << " " << fixed_text(r.circularity_um, 2) << " µm";
             if (summary_.result->bidirectional_um)
-                review << ", G(b) " << fmt(*summary_.result->bidirectional_um, 2) << " µm";
+                review << ", G(b) " << fixed_text(*summary_.result->bidirectional_um, 2) << " µm";
             review << ". Accept the test?";
             fire(Event::ResultsReady, review.str());
             if (op_.confirm("review", review.str())) {

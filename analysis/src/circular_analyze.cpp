@@ -6,12 +6,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "ballbar/analysis/types.hpp"
 #include "circular_fit.hpp"
 
 namespace ballbar::analysis::circular {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
 std::string run_name(std::size_t i, const RunSpec& r) {

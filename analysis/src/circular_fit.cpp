@@ -19,10 +19,11 @@
 #include <numeric>
 #include <unsupported/Eigen/FFT>
 
+#include "ballbar/analysis/types.hpp"
+
 namespace ballbar::analysis::circular::detail {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kSpikeDecay_s = 0.015;
 
 enum Col : int {

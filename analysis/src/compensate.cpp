@@ -16,16 +16,16 @@ Mat3 cross_matrix(const Vec3& d) {
 
 // Rotations about the coordinate axes by the angle with cosine c and sine s (and their inverses, _t),
 // component-wise: the nominal machine's rotary axes are coordinate axes.
-inline Vec3 rot_x(double c, double s, const Vec3& v) {
+inline Vec3 rotate_x(double c, double s, const Vec3& v) {
     return {v.x(), c * v.y() - s * v.z(), s * v.y() + c * v.z()};
 }
 inline Vec3 rot_x_t(double c, double s, const Vec3& v) {
     return {v.x(), c * v.y() + s * v.z(), -s * v.y() + c * v.z()};
 }
-inline Vec3 rot_y(double c, double s, const Vec3& v) {
+inline Vec3 rotate_y(double c, double s, const Vec3& v) {
     return {c * v.x() + s * v.z(), v.y(), -s * v.x() + c * v.z()};
 }
-inline Vec3 rot_z(double c, double s, const Vec3& v) {
+inline Vec3 rotate_z(double c, double s, const Vec3& v) {
     return {c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()};
 }
 inline Vec3 rot_z_t(double c, double s, const Vec3& v) {
@@ -213,9 +213,9 @@ Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& t
         }
         case MachineType::RRTTT: {
             // rt = I: the head turns the tool by Rx(A)·Ry(B) about the spindle pivot.
-            const Vec3 arm = rot_x(c1, s1, rot_y(c2, s2, g.tool_ball_mm));
+            const Vec3 arm = rotate_x(c1, s1, rotate_y(c2, s2, g.tool_ball_mm));
             f.position = lin + arm;
-            f.direction = rot_x(c1, s1, Vec3(s2, 0, c2));
+            f.direction = rotate_x(c1, s1, Vec3(s2, 0, c2));
             const Vec3 kb(0, c1, s1);  // Rx e_y
             f.cw[0] = Vec3::UnitX().cross(arm);
             f.cq[0] = Vec3::UnitX().cross(f.direction);
@@ -225,7 +225,7 @@ Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& t
         }
         case MachineType::RTTTR: {
             // rt = Rx(A), t = a_pivot; the head turns the tool by Ry(B).
-            const Vec3 arm = rot_y(c2, s2, g.tool_ball_mm);
+            const Vec3 arm = rotate_y(c2, s2, g.tool_ball_mm);
             f.position = rot_x_t(c1, s1, lin + arm - g.a_pivot_mm);
             f.direction = rot_x_t(c1, s1, Vec3(s2, 0, c2));
             const Vec3 kb(0, c1, -s1);  // Rxᵀ e_y
@@ -243,9 +243,9 @@ Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& t
 Vec3 Compensator::Frame::to_machine(const Vec3& v) const {
     switch (type) {
         case MachineType::TTTRR:
-            return rot_x(tr.c1, tr.s1, rot_z(tr.c2, tr.s2, v));
+            return rotate_x(tr.c1, tr.s1, rotate_z(tr.c2, tr.s2, v));
         case MachineType::RTTTR:
-            return rot_x(tr.c1, tr.s1, v);
+            return rotate_x(tr.c1, tr.s1, v);
         case MachineType::RRTTT:
             break;
     }

@@ -17,7 +17,7 @@
 namespace ballbar::analysis::detail {
 namespace {
 
-Eigen::MatrixXd pinv_psd(const Eigen::MatrixXd& g, double tol = 1e-12) {
+Eigen::MatrixXd pinv_psd_relative(const Eigen::MatrixXd& g, double tol = 1e-12) {
     if (g.rows() == 0) return g;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(g);
     Eigen::VectorXd inv = es.eigenvalues();
@@ -41,13 +41,13 @@ Eigen::VectorXd sub(const Eigen::VectorXd& v, const std::vector<Eigen::Index>& i
     return out;
 }
 
-double min_scaled_eigenvalue(const Eigen::MatrixXd& g) {
+double min_scaled_eigen(const Eigen::MatrixXd& g) {
     const Eigen::VectorXd d = g.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
     const Eigen::MatrixXd q = d.asDiagonal() * g * d.asDiagonal();
     return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(q, Eigen::EigenvaluesOnly).eigenvalues()[0];
 }
 
-std::string fmt(const char* f, double v) {
+std::string number_format(const char* f, double v) {
     char buf[64];
     if (f[2] == '0')
         std::snprintf(buf, sizeof buf, "%.0f", v);
@@ -102,7 +102,7 @@ SearchOutput search_beyond_library(const SearchInput& in) {
 
     // Project the model out: P = EᵀE − EᵀJ (JᵀJ)⁺ JᵀE, t = Eᵀr − EᵀJ (JᵀJ)⁺ Jᵀr.
     const Eigen::MatrixXd gem = e.transpose() * in.model_jac;
-    const Eigen::MatrixXd gpinv = pinv_psd(in.model_gram);
+    const Eigen::MatrixXd gpinv = pinv_psd_relative(in.model_gram);
     const Eigen::MatrixXd p = e.transpose() * e - gem * gpinv * gem.transpose();
     const Eigen::VectorXd t =
         e.transpose() * in.residual_mm - gem * (gpinv * (in.model_jac.transpose() * in.residual_mm));
@@ -152,7 +152,7 @@ SearchOutput search_beyond_library(const SearchInput& in) {
 
     auto explained = [&](const std::vector<Eigen::Index>& idx, bool* ok_rank) {
         const Eigen::MatrixXd ps = sub(p, idx);
-        if (idx.size() > 1 && min_scaled_eigenvalue(ps) < tol) {
+        if (idx.size() > 1 && min_scaled_eigen(ps) < tol) {
             *ok_rank = false;
             return 0.0;
         }
@@ -410,8 +410,9 @@ std::string describe(const std::string& family, std::span<const LearnedTerm> ter
                 const double amp = std::hypot(a, b);
                 double phase = rad_to_deg(std::atan2(b, a));
                 if (phase < 0) phase += 360;
-                parts.emplace_back(-amp, std::string(per_revolution(k)) + " per revolution, " + fmt("%.3g", amp * 1e6) +
-                                             " µrad, phase " + fmt("%.0f", phase) + "°");
+                parts.emplace_back(-amp, std::string(per_revolution(k)) + " per revolution, " +
+                                             number_format("%.3g", amp * 1e6) + " µrad, phase " +
+                                             number_format("%.0f", phase) + "°");
             }
             std::sort(parts.begin(), parts.end());
             out = "the " + ax + " axis: ";
@@ -419,15 +420,15 @@ std::string describe(const std::string& family, std::span<const LearnedTerm> ter
             return out;
         }
         case EmpiricalKind::rotary_backlash:
-            return "the " + ax + " axis: backlash (reversal error) " + fmt("%.3g", 2 * std::abs(terms[0].value) * 1e6) +
-                   " µrad";
+            return "the " + ax + " axis: backlash (reversal error) " +
+                   number_format("%.3g", 2 * std::abs(terms[0].value) * 1e6) + " µrad";
         case EmpiricalKind::linear_positioning: {
             out = "the " + ax + " axis: non-linear positioning error,";
             for (const LearnedTerm& l : terms)
                 out += std::string(l.term.order == 2   ? " quadratic "
                                    : l.term.order == 3 ? " cubic "
                                                        : " order-n ") +
-                       fmt("%.3g", l.value * 1e3) + " µm at " + ax + " = 100 mm";
+                       number_format("%.3g", l.value * 1e3) + " µm at " + ax + " = 100 mm";
             return out;
         }
         default:
@@ -453,7 +454,7 @@ std::string describe(const std::string& family, std::span<const LearnedTerm> ter
             f = 1e3;
             shown = "µm";
         }
-        out += " " + l.term.name() + " " + fmt("%.3g", l.value * f) + " " + shown;
+        out += " " + l.term.name() + " " + number_format("%.3g", l.value * f) + " " + shown;
     }
     return out;
 }

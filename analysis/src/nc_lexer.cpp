@@ -23,16 +23,16 @@ namespace {
 }
 
 /// A number after a word letter: [+-]digits[.digits] (no exponent, no nan/inf: NC has none).
-double number_text(std::string_view s, std::size_t& i, int line, char letter);
+double plain_number(std::string_view s, std::size_t& i, int line, char letter);
 
 double number_of(std::string_view s, std::size_t& i, int line, char letter) {
     const std::size_t start = i;
-    const double v = number_text(s, i, line, letter);
+    const double v = plain_number(s, i, line, letter);
     if (exponent_at(s, i)) exponent_number(s, start, i, line, letter);
     return v;
 }
 
-double number_text(std::string_view s, std::size_t& i, int line, char letter) {
+double plain_number(std::string_view s, std::size_t& i, int line, char letter) {
     const std::size_t start = i;
     if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
     // The common case, a digit first: the exact fast path (decimal_text.hpp), else from_chars (no exponent) in one

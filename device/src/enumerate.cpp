@@ -9,15 +9,10 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "wide_text.hpp"
+
 namespace ballbar::device {
 namespace {
-
-std::string narrow(const wchar_t* w) {
-    std::string s;
-    if (!w) return s;
-    for (; *w; ++w) s.push_back(*w >= 0x20 && *w < 0x7f ? static_cast<char>(*w) : '?');
-    return s;
-}
 
 std::string usb_uri(const char* scheme, std::uint16_t vid, std::uint16_t pid, const std::string& serial) {
     return std::string(scheme) + ":" + hex4(vid) + ":" + hex4(pid) + (serial.empty() ? "" : ":" + serial);
@@ -121,7 +116,7 @@ void enumerate_usb(Enumeration& out) {
 
 void enumerate_hid(Enumeration& out) {
     if (hid_init() != 0) {
-        out.warnings.push_back("HID devices not searched: hidapi: " + narrow(hid_error(nullptr)));
+        out.warnings.push_back("HID devices not searched: hidapi: " + detail::narrow(hid_error(nullptr)));
         return;
     }
     const std::size_t first = out.instruments.size();
@@ -133,9 +128,9 @@ void enumerate_hid(Enumeration& out) {
         f.link = UsbLink::Hid;
         f.vid = id->vid;
         f.pid = id->pid;
-        f.model = narrow(i->product_string);
+        f.model = detail::narrow(i->product_string);
         if (f.model.empty()) f.model = id->model;
-        f.serial = narrow(i->serial_number);
+        f.serial = detail::narrow(i->serial_number);
         f.path = i->path ? i->path : "";
         f.uri = usb_uri("hid", f.vid, f.pid, f.serial);
         out.instruments.push_back(std::move(f));

@@ -14,6 +14,7 @@
 #include "ballbar/device/hid.hpp"
 #include "ballbar/device/ids.hpp"
 #include "ballbar/device/usb.hpp"
+#include "wide_text.hpp"
 
 namespace ballbar::device {
 
@@ -41,15 +42,8 @@ std::span<const std::uint8_t> hid_report_payload(std::span<const std::uint8_t, k
 
 namespace {
 
-std::string narrow(const wchar_t* w) {
-    std::string s;
-    if (!w) return s;
-    for (; *w; ++w) s.push_back(*w >= 0x20 && *w < 0x7f ? static_cast<char>(*w) : '?');
-    return s;
-}
-
 std::string hid_text(hid_device* dev) {
-    return narrow(hid_error(dev));
+    return detail::narrow(hid_error(dev));
 }
 
 int to_hid_timeout(std::chrono::milliseconds timeout) {
@@ -149,7 +143,7 @@ std::unique_ptr<Transport> open_hid_transport(std::uint16_t vid, std::uint16_t p
     std::string dev_serial;
     hid_device_info* list = hid_enumerate(vid, pid);
     for (hid_device_info* i = list; i; i = i->next) {
-        const std::string s = narrow(i->serial_number);
+        const std::string s = detail::narrow(i->serial_number);
         if (!serial.empty() && s != serial) continue;
         path = i->path ? i->path : "";
         dev_serial = s;

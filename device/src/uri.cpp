@@ -15,11 +15,11 @@ namespace ballbar::device {
 
 namespace {
 
-constexpr const char* kForms =
+constexpr const char* kDeviceUriForms =
     "expected emulator:[CONFIG], serial:PATH, tcp:HOST:PORT, usb:VID:PID[:SERIAL] or hid:VID:PID[:SERIAL]";
 
 [[noreturn]] void bad(std::string_view uri, const std::string& why) {
-    throw std::invalid_argument("bad device URI '" + std::string(uri) + "': " + why + " (" + kForms + ")");
+    throw std::invalid_argument("bad device URI '" + std::string(uri) + "': " + why + " (" + kDeviceUriForms + ")");
 }
 
 std::uint16_t parse_hex16(std::string_view uri, std::string_view s, const char* what) {

@@ -23,17 +23,6 @@ std::string um(double v) {
     return fixed(v, kUmDecimals) + " µm";
 }
 
-std::string range_C(const Range& r) {
-    if (!r.present()) return "not recorded";
-    std::string s = fixed(*r.mean, 2) + " °C";
-    if (r.min && r.max) s += " (" + fixed(*r.min, 2) + " to " + fixed(*r.max, 2) + ")";
-    return s;
-}
-
-std::string or_dash(const std::string& s) {
-    return s.empty() ? "–" : s;
-}
-
 /// "ccw from 0°: 360° of data between 45° overshoots".
 std::string arc_text(const CircularRun& r) {
     return r.direction + " from " + fixed(r.start_deg, 0) + "°: " + fixed(r.data_arc_deg, 0) + "° data, " +

@@ -51,4 +51,15 @@ std::string clock_time(double seconds) {
     return neg ? "-" + t : t;
 }
 
+std::string range_C(const Range& r) {
+    if (!r.present()) return "not recorded";
+    std::string s = fixed(*r.mean, 2) + " °C";
+    if (r.min && r.max) s += " (" + fixed(*r.min, 2) + " to " + fixed(*r.max, 2) + ")";
+    return s;
+}
+
+std::string or_dash(const std::string& s) {
+    return s.empty() ? "–" : s;
+}
+
 }  // namespace ballbar::report

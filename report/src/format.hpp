@@ -6,6 +6,8 @@
 #include <optional>
 #include <string>
 
+#include "ballbar/report/report.hpp"
+
 namespace ballbar::report {
 
 inline constexpr int kUmDecimals = 2;      ///< µm
@@ -25,5 +27,9 @@ std::string degrees(const std::optional<double>& rad);
 std::string arcseconds(const std::optional<double>& rad, int decimals = kArcsecDecimals);
 /// A session time: "m:ss" or "h:mm:ss".
 std::string clock_time(double seconds);
+/// A temperature range: "20.10 °C (20.00 to 20.20)", or "not recorded".
+std::string range_C(const Range& r);
+/// The text, or "–" when empty.
+std::string or_dash(const std::string& s);
 
 }  // namespace ballbar::report

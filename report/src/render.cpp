@@ -22,17 +22,6 @@ std::string vec_mm(const Vec3& v) {
     return "[" + fixed(v.x(), 3) + ", " + fixed(v.y(), 3) + ", " + fixed(v.z(), 3) + "] mm";
 }
 
-std::string range_C(const Range& r) {
-    if (!r.present()) return "not recorded";
-    std::string s = fixed(*r.mean, 2) + " °C";
-    if (r.min && r.max) s += " (" + fixed(*r.min, 2) + " to " + fixed(*r.max, 2) + ")";
-    return s;
-}
-
-std::string or_dash(const std::string& s) {
-    return s.empty() ? "–" : s;
-}
-
 void setup_section(Document& doc, const Report& r) {
     const Header& h = r.header;
     const auto& m = h.machine;

@@ -18,13 +18,13 @@ using ojson = nlohmann::ordered_json;
 [[noreturn]] void bad(const std::string& key, const std::string& what) {
     throw FormatError("result \"identification\"" + (key.empty() ? "" : ": \"" + key + "\"") + " " + what);
 }
-using Fields = fileio::JsonFields<ojson, decltype(&bad)>;
+using IdentificationFields = fileio::JsonFields<ojson, decltype(&bad)>;
 
 /// A number; null (what nlohmann writes for NaN and ±∞) reads as NaN.
-double number_or_nan(const Fields& f, const char* key) {
+double number_or_nan(const IdentificationFields& f, const char* key) {
     return f.at(key).is_null() ? std::numeric_limits<double>::quiet_NaN() : f.number(key);
 }
-int count(const Fields& f, const char* key) {
+int count(const IdentificationFields& f, const char* key) {
     return static_cast<int>(f.count(key));
 }
 
@@ -71,7 +71,7 @@ IdentificationRecord identification_from_json(std::string_view text_in) {
     } catch (const ojson::exception& e) {
         throw FormatError(std::string("result \"identification\" is not valid JSON: ") + e.what());
     }
-    const Fields f(j, "", &bad);
+    const IdentificationFields f(j, "", &bad);
     f.only({"converged", "iterations", "message", "readings", "degrees_of_freedom", "residual_rms_um",
             "residual_sigma_um", "noise_floor_um", "uncertainty_from_noise_floor", "initial_rms_um", "estimates",
             "correlation", "correlation_names", "model"});
@@ -90,7 +90,7 @@ IdentificationRecord identification_from_json(std::string_view text_in) {
         r.uncertainty_from_noise_floor = f.boolean("uncertainty_from_noise_floor");
     if (!f.at("estimates").is_array()) bad("estimates", "must be an array");
     for (std::size_t i = 0; i < j["estimates"].size(); ++i) {
-        const Fields e(j["estimates"][i], "estimates[" + std::to_string(i) + "]", &bad);
+        const IdentificationFields e(j["estimates"][i], "estimates[" + std::to_string(i) + "]", &bad);
         // docs/cli.md's vocabulary (value, value_std), or as results were stored before it (estimate, std).
         const bool before_vocabulary = e.has("estimate");
         if (before_vocabulary)

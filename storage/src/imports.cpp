@@ -11,7 +11,7 @@
 namespace ballbar::storage {
 namespace {
 
-ImportRecord read_record(Statement& st) {
+ImportRecord import_record(Statement& st) {
     ImportRecord r;
     r.session_id = st.column_int(0);
     r.content_sha256 = st.column_text(1);
@@ -66,7 +66,7 @@ std::vector<ImportRecord> imports_of_content(Store& store, std::string_view cont
         "SELECT session_id, content_sha256, file_name, bytes, imported_at FROM imports WHERE content_sha256 = ? "
         "ORDER BY session_id");
     st.bind(1, content_sha256);
-    while (st.step()) out.push_back(read_record(st));
+    while (st.step()) out.push_back(import_record(st));
     return out;
 }
 
@@ -76,7 +76,7 @@ std::optional<ImportRecord> import_of(Store& store, std::int64_t session_id) {
         "SELECT session_id, content_sha256, file_name, bytes, imported_at FROM imports WHERE session_id = ?");
     st.bind(1, session_id);
     if (!st.step()) return std::nullopt;
-    return read_record(st);
+    return import_record(st);
 }
 
 }  // namespace ballbar::storage

@@ -14,9 +14,9 @@ using json = nlohmann::json;
 [[noreturn]] void bad_instrument(const std::string& key, const std::string& problem) {
     throw FormatError("result \"instrument\"" + (key.empty() ? "" : ": \"" + key + "\"") + " " + problem);
 }
-using Fields = fileio::JsonFields<json, decltype(&bad_instrument)>;
+using InstrumentFields = fileio::JsonFields<json, decltype(&bad_instrument)>;
 
-std::optional<std::string> text_or_null(const Fields& f, const char* key) {
+std::optional<std::string> optional_text(const InstrumentFields& f, const char* key) {
     const json* v = f.optional(key);
     if (!v) return std::nullopt;
     if (!v->is_string()) f.refuse(key, "must be a string or null");
@@ -59,7 +59,7 @@ GaugeInstrumentRecord gauge_instrument_from_json(std::string_view text) {
     } catch (const json::exception& e) {
         throw FormatError(std::string("result \"instrument\" is not valid JSON: ") + e.what());
     }
-    const Fields f(j, "", &bad_instrument);
+    const InstrumentFields f(j, "", &bad_instrument);
     f.only({"kind", "maker", "model", "serial", "firmware", "inch", "low_battery", "uri", "resolution_mm",
             "reading_rate_hz", "target_rate_hz", "calibrated_length_mm", "sign", "readings", "not_ready",
             "out_of_range", "timeouts", "invalid", "errors"});
@@ -68,8 +68,8 @@ GaugeInstrumentRecord gauge_instrument_from_json(std::string_view text) {
         r.kind = f.text("kind");
         r.maker = f.text("maker");
         r.model = f.text("model");
-        r.serial = text_or_null(f, "serial");
-        r.firmware = text_or_null(f, "firmware");
+        r.serial = optional_text(f, "serial");
+        r.firmware = optional_text(f, "firmware");
         r.inch = f.boolean("inch");
         r.low_battery = f.boolean("low_battery");
     }

@@ -27,9 +27,9 @@ std::string known_keys() {
 [[noreturn]] void refuse(const std::string& key, const std::string& problem) {
     throw FormatError(key + ": " + problem);
 }
-using Fields = fileio::JsonFields<ojson, decltype(&refuse)>;  // fileio/json_fields.hpp
+using ModelFields = fileio::JsonFields<ojson, decltype(&refuse)>;  // fileio/json_fields.hpp
 
-analysis::Vec3 vec_from(const Fields& f, const ojson& v, const std::string& where) {
+analysis::Vec3 vec3_field(const ModelFields& f, const ojson& v, const std::string& where) {
     if (!v.is_array() || v.size() != 3) f.refuse(where, "must be an array of 3 numbers (mm)");
     analysis::Vec3 out;
     for (std::size_t i = 0; i < 3; ++i)
@@ -92,7 +92,7 @@ ErrorModel model_from_json(std::string_view text) {
         throw FormatError(std::string("malformed JSON: ") + e.what());
     }
     if (!j.is_object()) throw FormatError("a model must be a JSON object");
-    const Fields f(j, "", &refuse);
+    const ModelFields f(j, "", &refuse);
     for (const auto& item : j.items())
         if (std::find(std::begin(kKeys), std::end(kKeys), item.key()) == std::end(kKeys))
             throw FormatError(item.key() + ": unknown key (" + known_keys() + ")");
@@ -149,8 +149,8 @@ ErrorModel model_from_json(std::string_view text) {
             const std::string where = "sockets[" + std::to_string(i) + "]";
             if (!s.is_object() || !s.contains("nominal_mm") || !s.contains("offset_mm") || s.size() != 2)
                 throw FormatError(where + ": must be {\"nominal_mm\": [x, y, z], \"offset_mm\": [x, y, z]}");
-            m.sockets.push_back({vec_from(f, s["nominal_mm"], where + ".nominal_mm"),
-                                 vec_from(f, s["offset_mm"], where + ".offset_mm")});
+            m.sockets.push_back({vec3_field(f, s["nominal_mm"], where + ".nominal_mm"),
+                                 vec3_field(f, s["offset_mm"], where + ".offset_mm")});
         }
     }
     if (f.has("residual_rms_um")) {

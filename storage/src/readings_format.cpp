@@ -49,7 +49,7 @@ struct Column {
     std::function<std::string(const analysis::Reading&)> value;  // "" = not given
 };
 
-std::string opt(const std::optional<double>& v) {
+std::string number_or_empty(const std::optional<double>& v) {
     return v ? shortest(*v) : std::string();
 }
 
@@ -84,10 +84,10 @@ std::string format_readings(const analysis::ReadingSet& set, const ReadingsMetad
         {"nominal_mm",
          [&machine](const auto& r) { return shortest(analysis::nominal_length(machine, r.pose, r.socket_mm)); }},
         {"n", [](const auto& r) { return r.n > 0 ? std::to_string(r.n) : std::string(); }},
-        {"std_mm", [](const auto& r) { return opt(r.std_mm); }},
-        {"bar_temp_C", [](const auto& r) { return opt(r.bar_temp_C); }},
-        {"air_temp_C", [](const auto& r) { return opt(r.air_temp_C); }},
-        {"machine_temp_C", [](const auto& r) { return opt(r.machine_temp_C); }},
+        {"std_mm", [](const auto& r) { return number_or_empty(r.std_mm); }},
+        {"bar_temp_C", [](const auto& r) { return number_or_empty(r.bar_temp_C); }},
+        {"air_temp_C", [](const auto& r) { return number_or_empty(r.air_temp_C); }},
+        {"machine_temp_C", [](const auto& r) { return number_or_empty(r.machine_temp_C); }},
     };
     const std::vector<std::string> required = {"X_mm",        "Y_mm",        "Z_mm",        all[7].name,
                                                all[8].name,   "socket_x_mm", "socket_y_mm", "socket_z_mm",

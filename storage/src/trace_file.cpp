@@ -25,16 +25,16 @@ namespace {
 namespace circ = analysis::circular;
 using ojson = nlohmann::ordered_json;
 
-constexpr std::string_view kMagic = "# ballbar-trace/1";
+constexpr std::string_view kTraceMagic = "# ballbar-trace/1";
 
-std::string_view trim(std::string_view s) {
+std::string_view trim_blanks(std::string_view s) {
     while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
     while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
     return s;
 }
 
-std::optional<double> parse_number(std::string_view s) {
-    s = trim(s);
+std::optional<double> parse_cell(std::string_view s) {
+    s = trim_blanks(s);
     if (s.empty()) return std::nullopt;
     if (s.front() == '+') s.remove_prefix(1);
     double v = 0;
@@ -179,7 +179,7 @@ TraceFile parse_trace(std::string_view text) {
     LineCursor lines(text);
     std::string_view line;
     if (!lines.next(line)) throw TraceFileError(1, "empty file");
-    if (line != kMagic) {
+    if (line != kTraceMagic) {
         if (line.rfind("# ballbar-trace/", 0) == 0)
             throw TraceFileError(
                 1, "unsupported format version \"" + std::string(line.substr(2)) + "\" (this is ballbar-trace/1)");
@@ -196,11 +196,11 @@ TraceFile parse_trace(std::string_view text) {
             have_column_row = true;
             break;
         }
-        const std::string_view body = trim(line.substr(1));
+        const std::string_view body = trim_blanks(line.substr(1));
         const auto colon = body.find(':');
         if (colon == std::string_view::npos || !is_key(body.substr(0, colon))) continue;  // a comment
         const std::string key(body.substr(0, colon));
-        const std::string value(trim(body.substr(colon + 1)));
+        const std::string value(trim_blanks(body.substr(colon + 1)));
         static const char* known[] = {"test", "instrument", "machine", "operator", "started_at", "notes"};
         const bool is_known = std::find_if(std::begin(known), std::end(known),
                                            [&](const char* k) { return key == k; }) != std::end(known);
@@ -247,7 +247,7 @@ TraceFile parse_trace(std::string_view text) {
     {
         std::stringstream ss{std::string(line)};
         std::string c;
-        while (std::getline(ss, c, ',')) cols.emplace_back(trim(c));
+        while (std::getline(ss, c, ',')) cols.emplace_back(trim_blanks(c));
         if (!line.empty() && line.back() == ',') cols.emplace_back();
     }
     int c_time = -1, c_len = -1, c_bar = -1, c_air = -1;
@@ -278,7 +278,7 @@ TraceFile parse_trace(std::string_view text) {
     out.samples.reserve(lines.lines_left());
     while (lines.next(line)) {
         const int no = lines.number();
-        if (trim(line).empty()) continue;
+        if (trim_blanks(line).empty()) continue;
         if (line[0] == '#') throw TraceFileError(no, "a header line after the column row");
         fields.clear();
         std::string_view rest = line;
@@ -291,11 +291,11 @@ TraceFile parse_trace(std::string_view text) {
         if (fields.size() != cols.size())
             throw TraceFileError(
                 no, std::to_string(fields.size()) + " fields where the column row has " + std::to_string(cols.size()));
-        const auto t = parse_number(fields[static_cast<std::size_t>(c_time)]);
+        const auto t = parse_cell(fields[static_cast<std::size_t>(c_time)]);
         if (!t)
             throw TraceFileError(
                 no, "time_s \"" + std::string(fields[static_cast<std::size_t>(c_time)]) + "\" is not a number");
-        const auto m = parse_number(fields[static_cast<std::size_t>(c_len)]);
+        const auto m = parse_cell(fields[static_cast<std::size_t>(c_len)]);
         if (!m)
             throw TraceFileError(
                 no, "measured_mm \"" + std::string(fields[static_cast<std::size_t>(c_len)]) + "\" is not a number");
@@ -311,9 +311,9 @@ TraceFile parse_trace(std::string_view text) {
         out.samples.push_back({*t, *m});
         auto temp = [&](int c, std::vector<std::optional<double>>& into, const char* name) {
             if (c < 0) return;
-            const std::string_view f = trim(fields[static_cast<std::size_t>(c)]);
+            const std::string_view f = trim_blanks(fields[static_cast<std::size_t>(c)]);
             if (f.empty()) return into.push_back(std::nullopt);
-            const auto v = parse_number(f);
+            const auto v = parse_cell(f);
             if (!v) throw TraceFileError(no, std::string(name) + " \"" + std::string(f) + "\" is not a number");
             if (const std::string why = column_problem(name, *v); !why.empty()) throw TraceFileError(no, why);
             into.push_back(v);
@@ -336,7 +336,7 @@ TraceFile read_trace_file(const std::filesystem::path& path) {
 }
 
 std::string format_trace(const TraceFile& t) {
-    std::string out(kMagic);
+    std::string out(kTraceMagic);
     out += "\n# test: " + test_json(t.test) + "\n";
     if (!t.instrument_json.empty()) out += "# instrument: " + t.instrument_json + "\n";
     if (!t.machine_json.empty()) out += "# machine: " + t.machine_json + "\n";

@@ -11,11 +11,11 @@
 namespace ballbar::device::gauge {
 namespace {
 
-constexpr const char* kForms =
+constexpr const char* kGaugeUriForms =
     "expected sylvac:PATH, mitutoyo-itn:[SERIAL], digimatic:PATH or modbus:PATH[?slave=N&baud=B]";
 
 [[noreturn]] void bad(std::string_view uri, const std::string& why) {
-    throw std::invalid_argument("bad device URI '" + std::string(uri) + "': " + why + " (" + kForms + ")");
+    throw std::invalid_argument("bad device URI '" + std::string(uri) + "': " + why + " (" + kGaugeUriForms + ")");
 }
 
 int parse_int(std::string_view uri, std::string_view s, const char* what, int lo, int hi) {
