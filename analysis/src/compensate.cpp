@@ -114,6 +114,10 @@ ToolPose MachineModel::tool_pose(const Pose& pose) const {
 }
 
 ToolPose MachineModel::tool_pose(const Pose& pose, const Trig& tr) const {
+    return tool_pose(pose, tr, Vec3::Zero());
+}
+
+ToolPose MachineModel::tool_pose(const Pose& pose, const Trig& tr, const Vec3& shift) const {
     // Rotation matrices are built once per pose and applied to vectors; their products are never
     // formed (two matrix products cost more than the four matrix-vector products they save).
     if (!terms_.empty()) {  // learned terms: the axes' actual positions, then the model as it is
@@ -127,30 +131,31 @@ ToolPose MachineModel::tool_pose(const Pose& pose, const Trig& tr) const {
         const double c1 = std::cos(e1), s1 = std::sin(e1), c2 = std::cos(e2), s2 = std::sin(e2);
         const Trig shifted{tr.c1 * c1 - tr.s1 * s1, tr.s1 * c1 + tr.c1 * s1, tr.c2 * c2 - tr.s2 * s2,
                            tr.s2 * c2 + tr.c2 * s2};
-        return static_pose(p, shifted);
+        return static_pose(p, shifted, shift);
     }
-    return static_pose(pose, tr);
+    return static_pose(pose, tr, shift);
 }
 
-ToolPose MachineModel::static_pose(const Pose& pose, const Trig& tr) const {
+ToolPose MachineModel::static_pose(const Pose& pose, const Trig& tr, const Vec3& shift) const {
     const Vec3 pivot = detail::linear_axes(e_, pose);
+    const Vec3 tool_mm = tool_mm_ + shift;
     const Mat3 ra = first_.rotation(tr.c1, tr.s1);
     const Mat3 rb = second_.rotation(tr.c2, tr.s2);
     switch (geom_.type) {
         case MachineType::TTTRR: {
             // Table point x ↦ qa + Ra(qc − qa + Rc(x + p0 − qc)); inverted for the tool ball.
-            const Vec3 ball = pivot + tool_mm_;
+            const Vec3 ball = pivot + tool_mm;
             const Vec3 in_a = ra.transpose() * (ball - first_.point) - chain_;
             return {rb.transpose() * in_a - base_, rb.transpose() * ra.row(2).transpose()};
         }
         case MachineType::RRTTT: {
             const Vec3 qa = pivot + first_.point;
             const Vec3 qb = pivot + second_.point;
-            return {qa + ra * (qb - qa + rb * (pivot + tool_mm_ - qb)), ra * rb.col(2)};
+            return {qa + ra * (qb - qa + rb * (pivot + tool_mm - qb)), ra * rb.col(2)};
         }
         case MachineType::RTTTR: {
             const Vec3 qb = pivot + second_.point;
-            const Vec3 ball = qb + rb * (pivot + tool_mm_ - qb);
+            const Vec3 ball = qb + rb * (pivot + tool_mm - qb);
             return {ra.transpose() * (ball - first_.point) - base_, ra.transpose() * rb.col(2)};
         }
     }
@@ -185,7 +190,7 @@ Compensator::Compensator(const MachineGeometry& geom, const ErrorParams& e, std:
     if (options_.max_iterations < 1) throw AnalysisError("compensation: max_iterations must be at least 1");
 }
 
-Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& tr) const {
+Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& tr, const Vec3& shift) const {
     // The nominal axes are coordinate axes, so the rotations are applied component-wise. A table
     // axis turns the workpiece under the tool (sign −), a head axis turns the tool (sign +). The
     // Jacobian columns rtᵀ(k × v) are formed in the table frame as (rtᵀk) × (rtᵀv).
@@ -195,10 +200,11 @@ Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& t
     f.type = g.type;
     f.tr = tr;
     const Vec3 lin = u.linear_mm();
+    const Vec3 tool_ball = g.tool_ball_mm + shift;
     switch (g.type) {
         case MachineType::TTTRR: {
             // rt = Rx(A)·Rz(C), t = a_pivot + Rx(A)·c_offset.
-            const Vec3 v = lin + g.tool_ball_mm - g.a_pivot_mm;             // ball − a_pivot, machine frame
+            const Vec3 v = lin + tool_ball - g.a_pivot_mm;                  // ball − a_pivot, machine frame
             const Vec3 va = rot_x_t(c1, s1, v) - g.c_offset_mm;             // Rxᵀ(ball − t)
             f.position = rot_z_t(c2, s2, va);                               // rtᵀ(ball − t)
             f.direction = rot_z_t(c2, s2, Vec3(0, s1, c1));                 // rtᵀ e_z
@@ -213,7 +219,7 @@ Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& t
         }
         case MachineType::RRTTT: {
             // rt = I: the head turns the tool by Rx(A)·Ry(B) about the spindle pivot.
-            const Vec3 arm = rotate_x(c1, s1, rotate_y(c2, s2, g.tool_ball_mm));
+            const Vec3 arm = rotate_x(c1, s1, rotate_y(c2, s2, tool_ball));
             f.position = lin + arm;
             f.direction = rotate_x(c1, s1, Vec3(s2, 0, c2));
             const Vec3 kb(0, c1, s1);  // Rx e_y
@@ -225,7 +231,7 @@ Compensator::Frame Compensator::frame(const Pose& u, const MachineModel::Trig& t
         }
         case MachineType::RTTTR: {
             // rt = Rx(A), t = a_pivot; the head turns the tool by Ry(B).
-            const Vec3 arm = rotate_y(c2, s2, g.tool_ball_mm);
+            const Vec3 arm = rotate_y(c2, s2, tool_ball);
             f.position = rot_x_t(c1, s1, lin + arm - g.a_pivot_mm);
             f.direction = rot_x_t(c1, s1, Vec3(s2, 0, c2));
             const Vec3 kb(0, c1, -s1);  // Rxᵀ e_y
@@ -297,10 +303,10 @@ std::array<double, 5> Compensator::step(const Frame& f, const Vec3& dw, const Ve
 __attribute__((flatten))
 #endif
 Correction
-Compensator::first_order(const Pose& u) const {
+Compensator::first_order_shifted(const Pose& u, const Vec3& shift) const {
     const MachineModel::Trig tr = MachineModel::trig(nominal_.geometry().type, u);
-    const Frame f = frame(u, tr);
-    const ToolPose got = actual_.tool_pose(u, tr);
+    const Frame f = frame(u, tr, shift);
+    const ToolPose got = actual_.tool_pose(u, tr, shift);
     Correction c;
     int suppressed = -1;
     c.du = step(f, f.position - got.position_mm, f.direction - got.direction, suppressed);
@@ -309,6 +315,14 @@ Compensator::first_order(const Pose& u) const {
     c.commanded = add_correction(nominal_.geometry().type, u, c.du);
     c.iterations = 1;
     return c;
+}
+
+Correction Compensator::first_order(const Pose& u) const {
+    return first_order_shifted(u, Vec3::Zero());
+}
+
+Correction Compensator::first_order(const Pose& u, const Vec3& tool_ball_mm) const {
+    return first_order_shifted(u, tool_ball_mm - nominal_.geometry().tool_ball_mm);
 }
 
 Correction Compensator::exact(const Pose& u) const {
@@ -325,7 +339,8 @@ Correction Compensator::exact(const Pose& u) const {
         c.position_error_mm = dw.norm();
         c.direction_error_rad = angle_between(want.direction, got.direction);
         if (c.iterations == options_.max_iterations) break;
-        const std::array<double, 5> inc = step(frame(cur, MachineModel::trig(type, cur)), dw, dq, suppressed);
+        const std::array<double, 5> inc =
+            step(frame(cur, MachineModel::trig(type, cur), Vec3::Zero()), dw, dq, suppressed);
         const bool direction_done = suppressed >= 0 ? std::abs(inc[3]) + std::abs(inc[4]) <= options_.tolerance_rad
                                                     : c.direction_error_rad <= options_.tolerance_rad;
         if (c.position_error_mm <= options_.tolerance_mm && direction_done) {

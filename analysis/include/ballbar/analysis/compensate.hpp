@@ -51,9 +51,13 @@ class MachineModel {
     };
     static Trig trig(MachineType type, const Pose& pose);
     ToolPose tool_pose(const Pose& pose, const Trig& t) const;
+    /// With the tool ball moved by `tool_shift_mm` from the geometry's (another tool in the spindle:
+    /// a controller's tool-length offset).
+    ToolPose tool_pose(const Pose& pose, const Trig& t, const Vec3& tool_shift_mm) const;
 
   private:
-    ToolPose static_pose(const Pose& pose, const Trig& t) const;  // without the learned terms
+    ToolPose static_pose(const Pose& pose, const Trig& t,
+                         const Vec3& tool_shift_mm) const;  // without the learned terms
     struct Axis {  // rotation about a fixed line: x ↦ point + R(θ + zero)(x − point)
         Vec3 point = Vec3::Zero();
         Vec3 dir = Vec3::UnitZ();
@@ -109,6 +113,10 @@ class Compensator {
     /// First-order correction (one model evaluation, nominal Jacobian). Errors are not evaluated
     /// after the correction (position_error_mm, direction_error_rad = 0) to keep it cheap.
     Correction first_order(const Pose& u) const;
+    /// The same for a tool point at `tool_ball_mm` from the commanded XYZ instead of the geometry's
+    /// (a controller compensating whatever tool is in the spindle: the LinuxCNC module). Allocates
+    /// nothing and throws nothing.
+    Correction first_order(const Pose& u, const Vec3& tool_ball_mm) const;
     /// Exact correction by Newton iteration.
     Correction exact(const Pose& u) const;
 
@@ -127,7 +135,8 @@ class Compensator {
         Vec3 cw[2], cq[2];
         Vec3 to_machine(const Vec3& v) const;
     };
-    Frame frame(const Pose& u, const MachineModel::Trig& t) const;
+    Frame frame(const Pose& u, const MachineModel::Trig& t, const Vec3& tool_shift_mm) const;
+    Correction first_order_shifted(const Pose& u, const Vec3& tool_shift_mm) const;
     // One linearised step: du from the pose error (intended − actual); `suppressed` chosen once, then kept.
     std::array<double, 5> step(const Frame& f, const Vec3& dw, const Vec3& dq, int& suppressed) const;
 
