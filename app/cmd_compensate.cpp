@@ -5,11 +5,13 @@
 // `ballbar-model/1` JSON file (what `ballbar identify` stores), a model id in the database, or a model
 // name (its latest version). Reports the largest correction and the blocks near a singularity.
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -35,6 +37,7 @@ struct CompensateArgs {
     std::string offsets;
     std::string controller;
     std::string tcp_on, tcp_off;
+    std::string start;  // "X0 Y0 Z100 A0 C0": where the machine is when the program starts
     bool tcp = false;
     bool iso_directions = false;
     double chord_tolerance_mm = 0.001;
@@ -94,6 +97,56 @@ std::vector<std::string> split_codes(const std::string& list) {
     return out;
 }
 
+/// --start "X0 Y0 Z100 A0 C0": every axis of the machine (mm, degrees), in the program's directions.
+ba::Pose parse_start(const std::string& text, ba::MachineType type, bool iso_directions) {
+    const char second = ba::rotary_axes(type).second;
+    const std::string axes = std::string("XYZA") + second;
+    ba::Pose p;
+    unsigned named = 0;
+    std::istringstream in(text);
+    std::string word;
+    auto bad = [&](const std::string& why) {
+        return Error(ErrorCategory::bad_input, "--start \"" + text + "\": " + why + " (give every axis: X Y Z A " +
+                                                   second + ", e.g. --start \"X0 Y0 Z100 A0 " + second + "0\")");
+    };
+    while (in >> word) {
+        const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(word[0])));
+        const std::size_t k = axes.find(letter);
+        if (k == std::string::npos) throw bad("'" + word + "' is not an axis of the model's machine");
+        double v = 0;
+        const char* first = word.data() + 1;
+        const char* last = word.data() + word.size();
+        const auto r = std::from_chars(first, last, v);
+        if (word.size() < 2 || r.ec != std::errc() || r.ptr != last || !std::isfinite(v))
+            throw bad("'" + word + "' is not an axis word with a number");
+        if (named & (1u << k)) throw bad(std::string(1, letter) + " twice");
+        named |= 1u << k;
+        const double sign = iso_directions ? -1.0 : 1.0;
+        switch (letter) {
+            case 'X':
+                p.X_mm = v;
+                break;
+            case 'Y':
+                p.Y_mm = v;
+                break;
+            case 'Z':
+                p.Z_mm = v;
+                break;
+            case 'A':
+                p.A_rad = sign * ba::deg_to_rad(v);
+                break;
+            case 'B':
+                p.B_rad = sign * ba::deg_to_rad(v);
+                break;
+            default:
+                p.C_rad = sign * ba::deg_to_rad(v);
+                break;
+        }
+    }
+    if (named != 0b11111u) throw bad("an axis is missing");
+    return p;
+}
+
 int run_compensate(const CompensateArgs& args, const Globals& globals) {
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -122,6 +175,8 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
         pc.offsets_source = args.offsets;
     }
     pc.interpreter.tcp_at_start = args.tcp;
+    if (!args.start.empty())
+        pc.interpreter.start = parse_start(args.start, model.model.machine.type, args.iso_directions);
     pc.interpreter.iso_directions = args.iso_directions;
     pc.interpreter.chord_tolerance_mm = args.chord_tolerance_mm;
     pc.options.exact = args.exact;
@@ -229,6 +284,9 @@ BALLBAR_COMMAND(compensate) {
     sub->add_option("--tcp-on", args->tcp_on, "words that switch tool-centre-point mode on (comma-separated)");
     sub->add_option("--tcp-off", args->tcp_off, "words that switch it off");
     sub->add_flag("--tcp", args->tcp, "the program starts in tool-centre-point (workpiece) coordinates");
+    sub->add_option("--start", args->start,
+                    "where the machine is when the program starts, in the frame of its first move: \"X Y Z A C\" "
+                    "words (mm, degrees; e.g. \"X0 Y0 Z100 A0 C0\"); without it the first move must name every axis");
     sub->add_flag("--iso-directions", args->iso_directions,
                   "the program's +A/+C are ISO's (LinuxCNC conventional-directions): the opposite of ballbar's");
     sub->add_option("--chord-tolerance", args->chord_tolerance_mm,

@@ -145,7 +145,8 @@ NcCompensateSummary compensate_nc_program(std::string_view text, const MachineGe
         ++sum.moves;
         if (st.frame != frame) {
             frame = st.frame;
-            if (sum.mode_switches.size() < 50) sum.mode_switches.emplace_back(st.line, frame);
+            if (sum.mode_switches.size() < 50)
+                sum.mode_switches.emplace_back(st.frame_line > 0 ? st.frame_line : st.line, frame);
         }
         const bool tcp = st.frame == NcFrame::Tcp;
         (tcp ? sum.tcp_moves : sum.joint_moves)++;

@@ -109,6 +109,10 @@ NcInterpreter::NcInterpreter(std::string_view text, NcInterpreterOptions options
             const auto r = std::from_chars(w.data() + 1, w.data() + w.size(), v);
             if (r.ec == std::errc() && r.ptr == w.data() + w.size()) tcp_numeric_.emplace_back(upper(w[0]), v);
         }
+    if (opt_.start) {  // every axis known from the start
+        pos_now_ = *opt_.start;
+        known_ = 0b111111;
+    }
     if (opt_.iso_directions)  // the table is in the controller's directions; inside, ballbar's
         for (auto& [name, p] : opt_.offsets.work) {
             p.A_rad = -p.A_rad;
@@ -185,6 +189,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     std::optional<int> g43;  // 430 or 434
     bool g49 = false;
     bool g91_in_block = false;
+    std::string_view f_text;  // the F word as written
     std::size_t i = 0;
     auto add_word = [&](std::string_view w) {
         if (!step.words.empty()) step.words += ' ';
@@ -334,7 +339,6 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
                     pos_now_.A_rad += work_offset_.A_rad - next.A_rad;
                     pos_now_.B_rad += work_offset_.B_rad - next.B_rad;
                     pos_now_.C_rad += work_offset_.C_rad - next.C_rad;
-                    if (tcp_) known_ = 0;
                     work_offset_ = next;
                     add_word(text);
                     break;
@@ -385,6 +389,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         if (has(c)) throw NcError(line, std::string("word ") + c + " twice in one block");
         seen |= 1u << (c - 'A');
         value[c - 'A'] = v;
+        if (c == 'F') f_text = text;
         if (c == 'T') {
             if (std::floor(v) != v || v < 0) throw NcError(line, "T word must be a tool number");
             next_tool_ = static_cast<int>(v);
@@ -430,7 +435,10 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         pos_now_.Z_mm += dl_before - dl_after;
         if (tcp_) known_ = 0;  // in TCP mode the length enters the kinematics: name every axis
     }
-    if (tcp_switch) known_ = 0;
+    if (tcp_switch) {
+        frame_line_ = line;
+        if (moved_ || !opt_.start) known_ = 0;  // a given start holds in the frame of the first move
+    }
 
     // Axis words to absolute positions (mm, rad, ballbar directions). G53: machine coordinates, the
     // unnamed axes where the machine is.
@@ -462,7 +470,10 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
         double& dst = axis_ref(target, k);
         dst = absolute_ ? v : dst + v;
     }
-    const bool moves = motion_code >= 0 || (has_axis && !dwell && !g28);
+    // A motion code alone only sets the modal motion ("G00 G17 G40 G90 G94"); an arc with a centre or a
+    // radius and no axis word is a full circle.
+    const bool moves =
+        (has_axis && !dwell && !g28) || (motion_code >= 2 && (has('I') || has('J') || has('K') || has('R')));
     if (dwell && has_axis) throw NcError(line, "G4 with axis words: dwell and motion must be separate blocks");
     if (motion_code >= 0) motion_ = motion_code;
     if (g28) {
@@ -480,8 +491,10 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     }
     if (!moves) {
         if (has_axis) throw NcError(line, "axis words without motion");
+        if (has('F')) add_word(f_text);  // the modal feed, for the moves that follow
         return;
     }
+    moved_ = true;
     if (motion_ < 0) throw NcError(line, "axis words before any G0/G1/G2/G3");
 
     // Every axis of the model must have a known position for an absolute move.
@@ -505,6 +518,7 @@ void NcInterpreter::parse_line(std::string_view raw, NcStep& step) {
     step.motion = motion_ == 0 ? NcMotion::Rapid : NcMotion::Feed;
     step.machine_coordinates = g53;
     step.frame = tcp_ ? NcFrame::Tcp : NcFrame::Joint;
+    step.frame_line = frame_line_;
     step.inverse_time = inverse_time_ && motion_ != 0;
     step.start = pos_now_;
     step.work_offset = g53 ? Pose{} : work_offset_;

@@ -145,6 +145,47 @@ TEST(NcInterpreter, RefusesWhatItCannotKnow) {
     }
 }
 
+// What CAM programs for LinuxCNC's table-tilting machine start with (its boat-xyzac.ngc): a switch to
+// tool-centre point, a modal "G00 G17 G40 G90 G94" without axis words, then "Z5". The motion code alone
+// moves nothing; the first move needs the start position the user gives (--start), which holds in the
+// frame of the first move; the switch is reported on its own line.
+TEST(NcInterpreter, AStartPositionLetsACamProgramBeginWithOneAxis) {
+    ba::NcInterpreterOptions o;
+    o.tcp = *ba::tcp_codes_for("linuxcnc");
+    const std::string program =
+        "%\nM428 ;TCP:xyzac\n(BOAT)\nG00 G17 G40 G90 G94\nZ5\nG01 Z-6.6 F300.0\nX-49.375 F600.0\nM30\n%\n";
+    try {
+        interpret(program, o);
+        FAIL() << "the first move names Z only";
+    } catch (const ba::NcError& e) {
+        EXPECT_EQ(e.line(), 5);  // "Z5", the move: not the G00 line before it
+        EXPECT_NE(std::string(e.what()).find("position of X is not known"), std::string::npos) << e.what();
+    }
+    ba::Pose start;
+    start.X_mm = 1, start.Y_mm = 2, start.Z_mm = 50, start.A_rad = 0.1, start.C_rad = 0.2;
+    o.start = start;
+    const auto s = interpret(program, o);
+    ASSERT_EQ(s.size(), 3u);
+    EXPECT_EQ(s[0].line, 5);
+    EXPECT_EQ(s[0].frame, ba::NcFrame::Tcp);
+    EXPECT_EQ(s[0].frame_line, 2);  // M428's line
+    EXPECT_DOUBLE_EQ(s[0].points[0].X_mm, 1);
+    EXPECT_DOUBLE_EQ(s[0].points[0].Z_mm, 5);
+    EXPECT_DOUBLE_EQ(s[0].points[0].C_rad, 0.2);
+    EXPECT_DOUBLE_EQ(*s[2].feed, 600);
+    EXPECT_DOUBLE_EQ(s[2].points[0].X_mm, -49.375);
+    EXPECT_DOUBLE_EQ(s[2].points[0].Z_mm, -6.6);
+    // A later switch forgets the position again: the next move must name every axis.
+    EXPECT_THROW(interpret("%\nG0 X0 Y0 Z0 A0 C0\nM428\nZ5\nM30\n%\n", o), ba::NcError);
+    // A feed on a block without motion is the modal feed of the moves after it: kept in the output.
+    ba::NcInterpreter in("%\nG0 X0 Y0 Z0 A0 C0\nG1 F250\nX1\nM30\n%\n", {});
+    ba::NcStep st;
+    ASSERT_TRUE(in.next(st));
+    ASSERT_TRUE(in.next(st));
+    EXPECT_EQ(st.motion, ba::NcMotion::None);
+    EXPECT_EQ(st.words, "F250");
+}
+
 }  // namespace
 
 namespace {

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "../independent_tttrr.hpp"
 #include "cli_harness.hpp"
 
 using nlohmann::json;
@@ -24,91 +25,16 @@ using namespace ballbar::test;
 
 namespace {
 
-constexpr double kPi = 3.141592653589793;
-double rad(double deg) {
-    return deg * kPi / 180;
-}
-
-struct V {
-    double x = 0, y = 0, z = 0;
-};
-V operator+(V a, V b) {
-    return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-V operator-(V a, V b) {
-    return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-V operator*(double s, V a) {
-    return {s * a.x, s * a.y, s * a.z};
-}
-double dot(V a, V b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-V cross(V a, V b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double norm_compensate_cam(V a) {
-    return std::sqrt(dot(a, a));
-}
-/// Rodrigues: v turned by angle t about the unit axis d.
-V turn(V d, double t, V v) {
-    return std::cos(t) * v + std::sin(t) * cross(d, v) + ((1 - std::cos(t)) * dot(d, v)) * d;
-}
-V rx_compensate_cam(double t, V v) {
-    return turn({1, 0, 0}, t, v);
-}
-V ry(double t, V v) {
-    return turn({0, 1, 0}, t, v);
-}
-V rz_compensate_cam(double t, V v) {
-    return turn({0, 0, 1}, t, v);
-}
+using namespace ballbar::test::tttrr;
 
 // The machine: TTTRR, A pivot at the origin, C frame 100 mm below it (docs/kinematics.md).
-const V kPivot{0, 0, 0}, kCOffset{0, 0, -100};
+const Geometry kMachine{{0, 0, 0}, {0, 0, -100}};
+const V kPivot = kMachine.a_pivot, kCOffset = kMachine.c_offset;
 
-struct Errors {
-    double Y0A = 0, Z0A = 0, B0A = 0, C0A = 0, X0C = 0, Y0C = 0, A0C = 0, B0C = 0, A_zero = 0, C_zero = 0, EXX = 0,
-           EYY = 0, C0Y = 0;
-    json to_json() const {
-        return {{"Y0A", Y0A}, {"Z0A", Z0A}, {"B0A", B0A}, {"C0A", C0A},       {"X0C", X0C},
-                {"Y0C", Y0C}, {"A0C", A0C}, {"B0C", B0C}, {"A_zero", A_zero}, {"C_zero", C_zero},
-                {"EXX", EXX}, {"EYY", EYY}, {"C0Y", C0Y}};
-    }
-};
-
-Errors seed_like() {
-    Errors e;
-    e.Y0A = 0.025, e.Z0A = -0.018, e.B0A = 4e-5, e.C0A = -3e-5, e.X0C = 0.035, e.Y0C = -0.022, e.A0C = 5e-5;
-    e.B0C = -3.5e-5, e.A_zero = 2e-5, e.C_zero = -3e-5, e.EXX = 8e-6, e.EYY = -6e-6, e.C0Y = 1e-5;
-    return e;
-}
-
-/// Where the tool point is relative to the table (the table frame) and the tool axis there, when the
-/// machine is commanded to (X, Y, Z, A, C) and the tool point sits `tool` from the commanded point.
-struct Seen {
-    V position, axis;
-};
-Seen actual_tool_in_table(const Errors& e, double X, double Y, double Z, double A, double C, V tool) {
-    const double x = X * (1 + e.EXX), y = Y * (1 + e.EYY), z = Z;
-    const V m = V{x - y * e.C0Y, y, z} + tool;  // the linear axes, then the tool
-    const V a_dir = rz_compensate_cam(e.C0A, ry(e.B0A, {1, 0, 0}));
-    const V c_dir = ry(e.B0C, rx_compensate_cam(e.A0C, {0, 0, 1}));
-    const V qa = kPivot + V{0, e.Y0A, e.Z0A};
-    const V p0 = kPivot + kCOffset;
-    const V qc = p0 + V{e.X0C, e.Y0C, 0};
-    // Table point x is at qa + Ra(qc + Rc(x + p0 − qc) − qa); inverted for the tool point and axis.
-    const double ta = A + e.A_zero, tc = C + e.C_zero;
-    const V in_a = turn(a_dir, -ta, m - qa) + qa - qc;
-    const V pos = turn(c_dir, -tc, in_a) + qc - p0;
-    const V axis = turn(c_dir, -tc, turn(a_dir, -ta, {0, 0, 1}));
-    return {pos, axis};
-}
-
-/// The controller's nominal tool-centre-point kinematics: workpiece (world = machine at A = C = 0)
-/// point w to the machine position of the tool point.
-V tcp_machine(V w, double A, double C) {
-    return kPivot + rx_compensate_cam(A, kCOffset + rz_compensate_cam(C, w - kPivot - kCOffset));
+json params_json(const Errors& e) {
+    return {{"Y0A", e.Y0A}, {"Z0A", e.Z0A}, {"B0A", e.B0A}, {"C0A", e.C0A},       {"X0C", e.X0C},
+            {"Y0C", e.Y0C}, {"A0C", e.A0C}, {"B0C", e.B0C}, {"A_zero", e.A_zero}, {"C_zero", e.C_zero},
+            {"EXX", e.EXX}, {"EYY", e.EYY}, {"C0Y", e.C0Y}};
 }
 
 // ---- the test's own reading of the NC subset the programs use -----------------------------------
@@ -223,11 +149,11 @@ Seen run_block(const Errors& e, const BlockEnd& b, const Table& t) {
     const double A = b.p[3] + b.off[3], C = b.p[4] + b.off[4];
     V u;
     if (b.tcp) {
-        u = tcp_machine(V{b.p[0] + b.off[0], b.p[1] + b.off[1], b.p[2] + b.off[2]}, A, C) - tool;
+        u = tcp_machine(kMachine, V{b.p[0] + b.off[0], b.p[1] + b.off[1], b.p[2] + b.off[2]}, A, C) - tool;
     } else {
         u = V{b.p[0] + b.off[0], b.p[1] + b.off[1], b.p[2] + b.off[2] + dl};
     }
-    return actual_tool_in_table(e, u.x, u.y, u.z, A, C, tool);
+    return actual_tool_in_table(kMachine, e, u.x, u.y, u.z, A, C, tool);
 }
 
 std::string model_json_compensate_cam(const Errors& e) {
@@ -238,7 +164,7 @@ std::string model_json_compensate_cam(const Errors& e) {
                   {"a_pivot_mm", {kPivot.x, kPivot.y, kPivot.z}},
                   {"c_offset_mm", {kCOffset.x, kCOffset.y, kCOffset.z}},
                   {"tool_ball_mm", {0, 0, 0}}}},
-                {"params", e.to_json()}}
+                {"params", params_json(e)}}
         .dump();
 }
 
@@ -279,10 +205,10 @@ Outcome compensate_and_run(const TempDir& d, const std::string& program, const E
         const BlockEnd& got = o.out.at(n);
         const Seen intended = run_block(none, want, t);  // the nominal machine at the input program
         const Seen actual = run_block(e, got, t);        // the erroneous machine at the output
-        o.max_position_mm = std::max(o.max_position_mm, norm_compensate_cam(actual.position - intended.position));
+        o.max_position_mm = std::max(o.max_position_mm, norm(actual.position - intended.position));
         if (std::abs(std::sin(want.p[3] + want.off[3])) >
             0.2)  // away from the A = 0 singularity (and the bound near it)
-            o.max_axis_rad = std::max(o.max_axis_rad, norm_compensate_cam(cross(actual.axis, intended.axis)));
+            o.max_axis_rad = std::max(o.max_axis_rad, norm(cross(actual.axis, intended.axis)));
         if (want.arc) {
             EXPECT_GT(got.lines, 1) << "N" << n << ": the arc was not linearised";
         }
@@ -369,8 +295,7 @@ TEST(CliCompensateCam, UncompensatedMachineMissesByTensOfMicrometres) {
     const auto in = read_program(cam_sample(), t);
     double worst = 0;
     for (const auto& [n, b] : in)
-        worst = std::max(
-            worst, norm_compensate_cam(run_block(seed_like(), b, t).position - run_block(Errors{}, b, t).position));
+        worst = std::max(worst, norm(run_block(seed_like(), b, t).position - run_block(Errors{}, b, t).position));
     std::printf("uncompensated: largest miss %.3g um\n", worst * 1e3);
     EXPECT_GT(worst, 0.01);
 }
@@ -395,8 +320,9 @@ TEST(CliCompensateCam, SummaryCountsTheModeOfEveryBlock) {
     EXPECT_EQ(o.summary["modes"]["tool_centre_point"], 5);  // N210–N250
     EXPECT_EQ(o.summary["modes"]["joint"], 15);
     ASSERT_EQ(o.summary["mode_switches"].size(), 2u);
-    EXPECT_EQ(o.summary["mode_switches"][0]["line"], 24);
+    EXPECT_EQ(o.summary["mode_switches"][0]["line"], 23);  // M428's own line (N200)
     EXPECT_EQ(o.summary["mode_switches"][0]["mode"], "tool-centre-point");
+    EXPECT_EQ(o.summary["mode_switches"][1]["line"], 29);  // M429 (N260)
     EXPECT_EQ(o.summary["retracts_uncompensated"], 1);
     // Machine functions, tool changes, offsets and the switch words pass through as written.
     const std::string out = slurp(d.path / "out.ngc");
@@ -404,6 +330,29 @@ TEST(CliCompensateCam, SummaryCountsTheModeOfEveryBlock) {
                              "N200 M428 (tool-centre point on)", "G91 G28 Z0.\nG90\n", "N310 M30\n"})
         EXPECT_NE(out.find(kept), std::string::npos) << kept << " missing from\n" << out;
     EXPECT_EQ(out.find("G2 "), std::string::npos) << "arcs are written as chords";
+}
+
+// CAM output that starts with one axis after M428 (as LinuxCNC's boat-xyzac.ngc): refused on the
+// move's own line without a start position, compensated with --start; a --start missing an axis is
+// refused with what to write.
+TEST(CliCompensateCam, AStartPositionLetsAProgramBeginWithOneAxis) {
+    TempDir d;
+    std::ofstream(d.path / "model.json") << model_json_compensate_cam(seed_like());
+    std::ofstream(d.path / "boat.ngc") << "%\nM428 ;TCP\n(BOAT)\nG00 G17 G40 G90 G94\nZ5\nG01 Z-6.6 F300.0\n"
+                                          "X-49.375 Y3 A10 C20 F600.0\nG00 Z10\nM429\nM30\n%\n";
+    const std::string base = "compensate --model '" + d.file("model.json") + "' --program '" + d.file("boat.ngc") +
+                             "' --out '" + d.file("out.ngc") + "' --json";
+    const CliRun without = run(d, base);
+    EXPECT_EQ(without.code, 2);
+    EXPECT_NE(without.err.find("line 5: the position of X is not known here"), std::string::npos) << without.err;
+    const CliRun partial = run(d, base + " --start 'X0 Y0 Z50 A0'");
+    EXPECT_EQ(partial.code, 2);
+    EXPECT_NE(partial.err.find("--start \"X0 Y0 Z50 A0\": an axis is missing"), std::string::npos) << partial.err;
+    const CliRun with = run(d, base + " --start 'X0 Y0 Z50 A0 C0'");
+    ASSERT_EQ(with.code, 0) << with.err;
+    const json summary = json::parse(with.out);
+    EXPECT_EQ(summary["mode_switches"][0]["line"], 2);  // M428's line
+    EXPECT_EQ(summary["modes"]["tool_centre_point"], 4);
 }
 
 TEST(CliCompensateCam, IsoDirectionsAreBallbarsNegated) {

@@ -48,6 +48,10 @@ struct NcInterpreterOptions {
     bool tcp_at_start = false;          ///< the program starts in tool-centre-point mode
     bool iso_directions = false;        ///< program +A/+C are ISO's: negated to ballbar's (and back on output)
     double chord_tolerance_mm = 0.001;  ///< arcs are split into chords within this of the arc
+    /// Where the machine is when the program starts, in the program coordinates of the frame its first
+    /// move is in (ballbar directions; a switch of frame before any move keeps it). Without it the
+    /// first move must name every axis.
+    std::optional<Pose> start;
 };
 
 enum class NcFrame { Joint, Tcp };
@@ -59,6 +63,7 @@ struct NcStep {
     bool arc = false;
     bool machine_coordinates = false;  ///< G53: points are machine positions, no offsets
     NcFrame frame = NcFrame::Joint;
+    int frame_line = 0;               ///< the line of the switch that put `frame` in force (0: from the start)
     bool inverse_time = false;        ///< G93 in force: F is 1/min for the whole block
     std::optional<double> feed;       ///< F in the block (mm/min, or 1/min under G93)
     std::vector<Pose> points;         ///< absolute end points of the segments (program frame, ballbar directions)
@@ -107,6 +112,8 @@ class NcInterpreter {
     bool absolute_ = true, arc_absolute_ = false, inch_ = false, inverse_time_ = false;
     int plane_ = 17;
     bool tcp_ = false;
+    int frame_line_ = 0;  // the line of the last frame switch
+    bool moved_ = false;  // a move was read
     bool tool_length_active_ = false;
     double tool_length_mm_ = 0;
     int tool_ = 0, next_tool_ = 0;
