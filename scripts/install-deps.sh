@@ -20,12 +20,14 @@ packages=(
   nlohmann-json3-dev   # app/storage: JSON in and out (solve, export, --json)
   libfmt-dev           # app: output formatting
   libcairo2-dev        # reports: vector PDF
+  linuxcnc-uspace-dev  # linuxcnc/: LinuxCNC's headers (kinematics.h, hal.h, rtapi.h), the ballbarkins module is built against them
   # tests and benchmarks
   libgtest-dev libgmock-dev   # unit and integration tests
   libbenchmark-dev            # bench/
   umockdev libumockdev-dev libglib2.0-dev  # fake USB/HID/tty devices so the real libraries run in tests
   sqlite3                     # the sqlite3 shell: benchmark comparison, inspection
   poppler-utils               # pdftotext/pdfinfo: report tests
+  linuxcnc-uspace             # LinuxCNC itself: its headless simulator runs the ballbarkins module's tests
   clang libclang-rt-14-dev    # libFuzzer targets of every parser (fuzz/, scripts/fuzz.sh)
   # packaging
   help2man                    # man pages generated from the commands' own --help
