@@ -3,9 +3,10 @@
 // line and reads what its sampler recorded every servo cycle. LinuxCNC runs one instance per machine
 // (a global lock, fixed shared-memory keys): the tests that use this run serially (ctest RUN_SERIAL).
 //
-// LinuxCNC 2.9 as Debian packages it loads modules only from /usr/lib/linuxcnc/modules/NAME.so; the
-// build's module is linked there as `ballbarkins.so` (a symbolic link the harness makes and re-points;
-// it never replaces a file it did not make: with the ballbar package installed the tests skip). rtapi_app refuses to
+// LinuxCNC 2.9 as Debian packages it loads modules only from /usr/lib/linuxcnc/modules/NAME.so; a copy
+// of the build's module in the run's directory is linked there as `ballbarkins.so` (a symbolic link the
+// harness makes and re-points; it never replaces a file it did not make: with the ballbar package
+// installed the tests skip). rtapi_app refuses to
 // run with a real uid of 0 unless told an unprivileged one (RTAPI_UID), which must be able to read the model and to
 // create rtapi_app's socket (RTAPI_FIFO_PATH names the socket itself, in a directory that uid owns).
 #pragma once
@@ -64,13 +65,20 @@ inline std::string unavailable() {
 #endif
 }
 
-/// Points /usr/lib/linuxcnc/modules/ballbarkins.so at the build's module.
-inline void link_module() {
+/// Points /usr/lib/linuxcnc/modules/ballbarkins.so at a copy of the build's module in `dir`: rtapi_app
+/// reads it there whatever the permissions of the build tree (a clean clone may sit in a private
+/// directory).
+inline void link_module(const fs::path& dir) {
 #ifdef BALLBAR_KINS_MODULE
+    const fs::path copy = dir / "ballbarkins.so";
+    fs::copy_file(BALLBAR_KINS_MODULE, copy, fs::copy_options::overwrite_existing);
+    ::chmod(copy.c_str(), 0644);
     const fs::path link = fs::path(kModuleDir) / (std::string(kBuildModuleName) + ".so");
     std::error_code ec;
     if (fs::is_symlink(fs::symlink_status(link, ec))) fs::remove(link);
-    fs::create_symlink(BALLBAR_KINS_MODULE, link);
+    fs::create_symlink(copy, link);
+#else
+    (void)dir;
 #endif
 }
 
@@ -87,11 +95,35 @@ inline std::string replace_all(std::string s, const std::string& from, const std
     return s;
 }
 
+/// A long CAM program run faster than written: the feed override (LinuxCNC caps it at [DISPLAY]
+/// MAX_FEED_OVERRIDE, 1 unless set: the simulator's INI sets 1000) and every velocity and acceleration
+/// limit multiplied by `limits_scale` (the servo loop is perfect: nothing follows but numbers).
+struct Speedup {
+    double feed_override = 1;
+    double limits_scale = 1;
+};
+
+/// The INI's MAX_..._VELOCITY and MAX_..._ACCELERATION values times `scale`.
+inline std::string scale_limits(const std::string& ini, double scale) {
+    if (scale == 1) return ini;
+    std::istringstream in(ini);
+    std::string out, line;
+    while (std::getline(in, line)) {
+        const auto eq = line.find(" = ");
+        const bool limit = line.rfind("MAX_", 0) == 0 &&
+                           (line.find("VELOCITY") < eq || line.find("ACCELERATION") < eq) && eq != std::string::npos;
+        if (limit) line = line.substr(0, eq + 3) + std::to_string(std::stod(line.substr(eq + 3)) * scale);
+        out += line + "\n";
+    }
+    return out;
+}
+
 /// Runs `program` (its text) with `kinematics` (the [KINS]KINEMATICS line) and extra HALCMD lines.
 /// The directory `dir` receives the configuration, the model files the caller wrote stay readable.
 inline SimRun run_sim(const ScratchDir& dir, const std::string& kinematics, const std::string& program,
-                      const std::vector<std::string>& halcmds = {}) {
-    link_module();
+                      const std::vector<std::string>& halcmds = {}, Speedup speedup = {}) {
+    ::chmod(dir.path.c_str(), 0755);  // rtapi_app runs as RTAPI_UID: it reads the module and the model here
+    link_module(dir.path);
     const fs::path sim = fs::path(BALLBAR_LINUXCNC_SIM_DIR);
     const fs::path cfg = dir.path / "cfg";
     fs::create_directories(cfg / "remap_subs");
@@ -103,16 +135,17 @@ inline SimRun run_sim(const ScratchDir& dir, const std::string& kinematics, cons
     std::string ini = read_text(sim / "ballbar.ini");
     ini = replace_all(ini, "@KINEMATICS@", kinematics);
     ini = replace_all(ini, "@HALCMDS@", hal);
+    ini = scale_limits(ini, speedup.limits_scale);
     std::ofstream(cfg / "ballbar.ini") << ini;
     std::ofstream(cfg / "program.ngc") << program;
-    // rtapi_app runs as RTAPI_UID: it reads the model and writes its FIFO directory.
-    ::chmod(dir.path.c_str(), 0755);
+    // ... and creates its socket in a directory it owns.
     const fs::path fifo = dir.path / "rtapi_fifo";
     fs::create_directories(fifo);
     if (::chown(fifo.c_str(), kRtapiUid, static_cast<gid_t>(-1)) != 0) {
     }
     const std::string cmd = "cd '" + cfg.string() + "' && RTAPI_UID=" + std::to_string(kRtapiUid) +
-                            " RTAPI_FIFO_PATH='" + (fifo / "socket").string() + "' BALLBAR_PROGRAM='" +
+                            " RTAPI_FIFO_PATH='" + (fifo / "socket").string() +
+                            "' BALLBAR_FEED_OVERRIDE=" + std::to_string(speedup.feed_override) + " BALLBAR_PROGRAM='" +
                             (cfg / "program.ngc").string() + "' timeout 180 linuxcnc -r ballbar.ini > '" +
                             (dir.path / "linuxcnc.log").string() + "' 2>&1";
     SimRun run;
