@@ -14,10 +14,8 @@
 // (its own code is MIT, compatible with it).
 #include <cerrno>
 #include <cmath>
-#include <cstdio>
 #include <exception>
 #include <new>
-#include <optional>
 
 #include "ballbar/linuxcnc/kins.hpp"
 
