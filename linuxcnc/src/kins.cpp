@@ -7,7 +7,6 @@
 #include <sstream>
 
 #include "ballbar/analysis/nc_compensate.hpp"
-#include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/model_codec.hpp"
 
 namespace ballbar::linuxcnc {
@@ -88,9 +87,7 @@ CompensatingKins CompensatingKins::from_model_file(const std::string& path) {
     storage::ErrorModel model;
     try {
         model = storage::model_from_json(bytes);
-    } catch (const storage::FormatError& e) {
-        throw KinsLoadError("the model file '" + path + "' is not a ballbar-model/1: " + e.what());
-    } catch (const std::exception& e) {  // the JSON parser's own errors
+    } catch (const std::exception& e) {  // the codec's FormatError and the JSON parser's own errors
         throw KinsLoadError("the model file '" + path + "' is not a ballbar-model/1: " + e.what());
     }
     try {

@@ -38,6 +38,13 @@ constexpr std::size_t kMoves = 7;
 
 const std::vector<std::string> kToolOffset = {"net tool-offset motion.tooloffset.z"};
 
+// LinuxCNC's xyzac-trt-kins set to the same nominal machine (the pins ballbarkins prints at load).
+std::vector<std::string> stock_kins_pins() {
+    return {"setp xyzac-trt-kins.x-rot-point 0",    "setp xyzac-trt-kins.y-rot-point 0",
+            "setp xyzac-trt-kins.z-rot-point -100", "setp xyzac-trt-kins.y-offset 20",
+            "setp xyzac-trt-kins.z-offset 110",     kToolOffset[0] + " => xyzac-trt-kins.tool-offset"};
+}
+
 std::string program() {
     return lc::read_text(std::string(BALLBAR_LINUXCNC_SIM_DIR) + "/moves.ngc");
 }
@@ -85,10 +92,7 @@ double pin_value(const std::string& log, const std::string& pin) {
 
 TEST_F(LinuxcncSim, AZeroErrorModelCommandsTheJointsOfLinuxcncsOwnXyzacTrtKins) {
     const ballbar::test::ScratchDir stock("lcnc-trt"), ours("lcnc-zero");
-    std::vector<std::string> trt = {
-        "setp xyzac-trt-kins.x-rot-point 0",    "setp xyzac-trt-kins.y-rot-point 0",
-        "setp xyzac-trt-kins.z-rot-point -100", "setp xyzac-trt-kins.y-offset 20",
-        "setp xyzac-trt-kins.z-offset 110",     kToolOffset[0] + " => xyzac-trt-kins.tool-offset"};
+    const std::vector<std::string> trt = stock_kins_pins();
     const auto a = lc::run_sim(stock, "xyzac-trt-kins sparm=identityfirst", program(), trt);
     ASSERT_EQ(a.status, 0) << a.log;
     const auto b = run_ballbarkins(ours, tt::Errors{});
@@ -155,10 +159,7 @@ TEST_F(LinuxcncSim, TheModuleAndBallbarCompensateCommandTheSameJoints) {
                             "' 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << lc::read_text(offline.file("log"));
     const std::string compensated = lc::read_text(out);
-    std::vector<std::string> trt = {
-        "setp xyzac-trt-kins.x-rot-point 0",    "setp xyzac-trt-kins.y-rot-point 0",
-        "setp xyzac-trt-kins.z-rot-point -100", "setp xyzac-trt-kins.y-offset 20",
-        "setp xyzac-trt-kins.z-offset 110",     kToolOffset[0] + " => xyzac-trt-kins.tool-offset"};
+    const std::vector<std::string> trt = stock_kins_pins();
     const auto a = lc::run_sim(offline, "xyzac-trt-kins sparm=identityfirst", compensated, trt);
     ASSERT_EQ(a.status, 0) << a.log;
     const auto b = run_ballbarkins(online, e);
