@@ -49,6 +49,10 @@ const std::map<std::string, std::string>& examples() {
          "  ballbar monitor --device serial:/dev/ttyACM0 --seconds 2 --json\n"
          "  ballbar monitor --device sylvac:/dev/ttyUSB0\n"},
         {"report", "  ballbar report 3 --out s3.pdf\n  ballbar report 3 --json\n"},
+        {"serve",
+         "  ballbar serve                                # http://127.0.0.1:8230/ on this machine only\n"
+         "  ballbar serve --demo                          # the circular demo waits for the first screen\n"
+         "  ballbar serve --host 0.0.0.0 --token-file /etc/ballbar/token   # the shop's network, with a token\n"},
         {"sessions", "  ballbar sessions\n  ballbar sessions show 3 --json\n"},
         {"udev-rules", "  ballbar udev-rules > 70-ballbar-gauges.rules\n  ballbar udev-rules --plugdev\n"},
         {"solve", "  ballbar solve ssm < request.json\n  ballbar solve orientation --input request.json\n"},

@@ -81,6 +81,14 @@ void CircularSession::fire(Event e, const std::string& detail) {
 }
 
 void CircularSession::end(Event e, const std::string& reason) {
+    // A stop asked for while a question waited (a page's stop button) ends resumable, whatever the
+    // answer the question got: what was measured is kept.
+    if (options_.stop && options_.stop->load() && !summary_.interrupted) {
+        summary_.interrupted = true;
+        summary_.reason = "interrupted by the operator";
+        if (sm_.can_apply(Event::Abort)) fire(Event::Abort, summary_.reason);
+        throw Stop{};
+    }
     summary_.reason = reason;
     if (sm_.can_apply(e)) fire(e, reason);
     throw Stop{};

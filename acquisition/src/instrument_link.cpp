@@ -57,6 +57,7 @@ void InstrumentLink::wait_for_instrument() {
     };
     op_.message("Waiting for the instrument to answer (at most " + whole_s(bound) +
                 " s; then the session stops, resumable).");
+    op_.instrument_lost(std::chrono::duration<double>(bound).count());
     for (int i = 0;; ++i) {
         const auto waited = clock::now() - start;
         if (i >= settings_.max_reconnect_attempts || waited >= bound)
@@ -68,7 +69,10 @@ void InstrumentLink::wait_for_instrument() {
         } catch (const SourceError& err) {
             fail(std::string("the instrument came back unusable: ") + err.what());
         }
-        if (back) return;
+        if (back) {
+            op_.instrument_back();
+            return;
+        }
         if (const auto now = clock::now(); now >= next_note && now - start < bound) {
             op_.message("Still no answer from the instrument: " + whole_s(bound - (now - start)) +
                         " s left before the session stops (resumable).");

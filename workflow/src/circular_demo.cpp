@@ -70,6 +70,7 @@ CircularDemoResult run_circular_demo(storage::Store& store, const CircularDemoOp
     prepared.dwell_s = dwell_s;
     CircularMeasureOptions measure;
     measure.device_uri = "emulator:";
+    measure.stop = o.stop;
     measure.open_transport = [&emulator] { return device::open_transport("serial:" + emulator.path()); };
     const CircularMeasureResult run = measure_circular(store, prepared, op, measure);
     emulator.halt();

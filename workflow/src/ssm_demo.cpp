@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "ballbar/acquisition/result_codec.hpp"
@@ -31,6 +32,40 @@ void EmulatedOperator::program_stop(const acq::ProgramStop& stop) {
     if (answer_delay_s_ > 0) machine_.dwell(answer_delay_s_);  // stands at the stop, then cycle start
     machine_.cycle_start(0);                                   // the rest runs once the machine stands at the stop
 }
+
+namespace {
+
+/// The front end's operator at the emulated machine: its answers and acknowledgements, then the machine
+/// does what it was told (runs the program, moves the socket, cycle start).
+class FrontAtMachine : public acq::Operator {
+  public:
+    FrontAtMachine(acq::Operator& front, EmulatedOperator& machine) : front_(front), machine_(machine) {}
+    bool confirm(std::string_view what, std::string_view prompt) override { return front_.confirm(what, prompt); }
+    std::size_t choose(const acq::Choice& c) override { return front_.choose(c); }
+    void message(std::string_view text) override { front_.message(text); }
+    acq::PointFailureAction point_failed(const acq::CapturedPoint& p, std::string_view why) override {
+        return front_.point_failed(p, why);
+    }
+    void wait_at_point(const acq::PlannedPoint& p) override { front_.wait_at_point(p); }
+    void progress(const acq::Progress& p) override { front_.progress(p); }
+    void run_program(const ba::NcProgram& program, std::span<const std::size_t> points, bool retry) override {
+        front_.run_program(program, points, retry);
+        machine_.run_program(program, points, retry);
+    }
+    void program_stop(const acq::ProgramStop& stop) override {
+        front_.program_stop(stop);
+        machine_.program_stop(stop);
+    }
+    void point_captured(const acq::CapturedPoint& p) override { front_.point_captured(p); }
+    void instrument_lost(double timeout_s) override { front_.instrument_lost(timeout_s); }
+    void instrument_back() override { front_.instrument_back(); }
+
+  private:
+    acq::Operator& front_;
+    EmulatedOperator& machine_;
+};
+
+}  // namespace
 
 TruthCheck check_against_truth(storage::Store& store, std::int64_t id, const device::Emulator& emu) {
     TruthCheck c;
@@ -125,7 +160,11 @@ SsmDemoResult run_ssm_demo(storage::Store& store, const SsmDemoOptions& o, const
     EmulatedOperator op(plan, emulator.emulator().machine(), cfg.faults);
     op.on_progress = events.progress;
     op.on_message = events.message;
-    acq::Session session(plan, source, sink, op);
+    std::optional<FrontAtMachine> front;
+    if (o.front) front.emplace(*o.front, op);
+    acq::SessionOptions so;
+    so.stop = o.stop;
+    acq::Session session(plan, source, sink, front ? static_cast<acq::Operator&>(*front) : op, so);
     out.summary = session.run();
     sink.finish(out.summary);
     emulator.halt();  // the emulator's state is read without racing its thread from here on

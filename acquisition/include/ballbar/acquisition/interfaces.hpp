@@ -169,6 +169,11 @@ class Operator {
     /// A continuous test (the circular test): the machine must run its part program now, from its
     /// start (`retry`: again, after a run that could not be used). `what` says which program and why.
     virtual void run_part_program(std::string_view what, bool /*retry*/) { message(what); }
+    /// The instrument stopped answering: the procedure waits for it at most `timeout_s` (then it stops,
+    /// resumable). A screen shows what to do and counts down; the message() before says it in words.
+    virtual void instrument_lost(double /*timeout_s*/) {}
+    /// The instrument answers again (it is re-referenced before the procedure goes on).
+    virtual void instrument_back() {}
 };
 
 /// Answers from the plan file; messages and progress are dropped.

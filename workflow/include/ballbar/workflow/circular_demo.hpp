@@ -5,6 +5,7 @@
 // emulator's truth by the accuracy rule of docs/circular.md.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -26,6 +27,7 @@ struct CircularDemoOptions {
     std::string notes;           ///< stored with the session (the command that made it)
     /// Called once the emulator serves and the session exists: the pty's path and the session id.
     std::function<void(const std::string& pty, std::int64_t session)> on_started;
+    const std::atomic<bool>* stop = nullptr;  ///< set: the session stops, resumable, keeping what it measured
 };
 
 struct CircularDemoResult {

@@ -36,6 +36,24 @@ std::string circular_part_program(const analysis::circular::TestSpec& test, anal
 std::int64_t store_planned_circular(storage::Store& store, const analysis::circular::TestSpec& test);
 
 /// One input of an analysis: a trace file, or a stored session's trace.
+/// A circular test as a front end gives it (the CLI's options, a page's form): plane, radius, centre,
+/// feed, feed-in, arc and runs (docs/circular.md, "Planning").
+struct CircularTestInput {
+    std::string plane = "XY";
+    double radius_mm = 100.0;
+    std::vector<double> centre_mm{0.0, 0.0, 0.0};
+    double feed_mm_min = 1000.0;
+    double feed_in_mm = 1.5;
+    double arc_deg = 360.0;
+    std::optional<double> overshoot_deg;  ///< default: 45 for a full circle, 20 for a partial arc
+    std::optional<double> start_deg;      ///< default: 0 (full) or −overshoot (partial)
+    std::string directions = "both";      ///< both (ccw, then cw from where it ended), ccw or cw
+};
+
+/// The test header the input describes, shared by the part program, the session and the analysis;
+/// Error (bad input) naming the option (as the CLI spells it) when it is not a test.
+analysis::circular::TestSpec circular_test_spec(const CircularTestInput& input);
+
 struct CircularInput {
     std::string name;  ///< as given
     storage::TraceFile trace;

@@ -7,6 +7,7 @@
 // machine truly stood (docs/procedure.md).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -73,6 +74,11 @@ struct SsmDemoOptions {
     std::optional<acquisition::PlanSpec> plan;  ///< default: acquisition::default_plan of the seed machine
     device::FaultConfig faults;                 ///< the emulator's faults (docs/emulator.md)
     std::string notes;                          ///< stored with the session
+    /// The front end's operator (a web page): it answers the questions and is told of each program and
+    /// program stop before the emulated machine runs it — the machine waits for the operator as a real
+    /// one would. Empty: the plan's answers, at once (the CLI's demo).
+    acquisition::Operator* front = nullptr;
+    const std::atomic<bool>* stop = nullptr;  ///< set: the session stops, resumable, keeping its points
 };
 
 /// What a front end hears while the demo runs.

@@ -1,0 +1,322 @@
+// SPDX-License-Identifier: MIT
+// `ballbar serve`'s JSON API in process, through real HTTP on a loopback port (cpp-httplib's client):
+// whole demos driven as a page drives them, what it refuses (token, cross-origin, malformed, unknown,
+// a second driver, a second server), 50 viewers at once, and a stop in the middle of a procedure.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "../scratch_dir.hpp"
+#include "ballbar/storage/session_export.hpp"
+#include "ballbar/storage/store.hpp"
+#include "ballbar/webui/server.hpp"
+// After Eigen (through the headers above): httplib.h brings <resolv.h>, whose `_res` macro breaks
+// Eigen's product kernels when they come later.
+#include <httplib.h>
+
+namespace {
+
+using json = nlohmann::json;
+using ballbar::webui::ServeOptions;
+using ballbar::webui::Server;
+using namespace std::chrono_literals;
+
+/// A server on a free loopback port, serving on a thread of the test.
+class Served {
+  public:
+    explicit Served(ServeOptions o) : server(std::move(o)) {
+        port = server.bind();
+        thread = std::thread([this] { server.run(); });
+    }
+    ~Served() {
+        server.stop();
+        thread.join();
+    }
+    httplib::Client client(const std::string& id = "page-1") const {
+        httplib::Client c("127.0.0.1", port);
+        c.set_read_timeout(30, 0);
+        c.set_default_headers({{"X-Ballbar-Client", id}});
+        return c;
+    }
+    Server server;
+    int port = 0;
+    std::thread thread;
+};
+
+ServeOptions options(const ballbar::test::ScratchDir& dir) {
+    ServeOptions o;
+    o.port = 0;
+    o.db_path = dir.file("sessions.db");
+    return o;
+}
+
+json get_json(httplib::Client& c, const std::string& path) {
+    auto r = c.Get(path.c_str());
+    if (!r) throw std::runtime_error("no answer to GET " + path);
+    if (r->status != 200) throw std::runtime_error("GET " + path + ": " + std::to_string(r->status) + " " + r->body);
+    return json::parse(r->body);
+}
+
+httplib::Result post(httplib::Client& c, const std::string& path, const json& body) {
+    return c.Post(path.c_str(), body.dump(), "application/json");
+}
+
+/// Waits until the procedure asks a question (its id) or has ended (0).
+std::uint64_t next_question(httplib::Client& c, json& state, std::chrono::seconds within = 60s) {
+    const auto until = std::chrono::steady_clock::now() + within;
+    while (std::chrono::steady_clock::now() < until) {
+        state = get_json(c, "/api/procedure");
+        if (state["question"].is_object()) return state["question"]["id"].get<std::uint64_t>();
+        if (!state["running"].get<bool>()) return 0;
+        std::this_thread::sleep_for(20ms);
+    }
+    throw std::runtime_error("no question and no end within the time");
+}
+
+/// Answers every question with its first option, as an operator clicking through; the final state.
+json drive_to_end(httplib::Client& c, std::vector<std::string>* asked = nullptr) {
+    json state;
+    while (const auto q = next_question(c, state)) {
+        if (asked) asked->push_back(state["question"]["what"].get<std::string>());
+        auto r = post(c, "/api/procedure/answer", {{"question", q}, {"option", 0}});
+        EXPECT_TRUE(r && r->status == 200) << (r ? r->body : "no answer");
+    }
+    return state;
+}
+
+TEST(WebuiApi, CircularDemoFromStartToReportAsThePageDrivesIt) {
+    ballbar::test::ScratchDir dir("webui");
+    Served s(options(dir));
+    auto c = s.client();
+    auto r = post(c, "/api/procedure", {{"procedure", "circular"}, {"demo", true}});
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << r->body;
+    std::vector<std::string> asked;
+    const json end = drive_to_end(c, &asked);
+    EXPECT_EQ(end["state"], "completed") << end.dump(2);
+    EXPECT_EQ(asked, (std::vector<std::string>{"reference", "setup", "run-part-program", "review"}));
+    EXPECT_EQ(end["step"]["n"], 6);
+    ASSERT_EQ(end["result"]["runs"].size(), 2u);
+    EXPECT_TRUE(end["result"]["pass"].get<bool>());  // the diagnosis matches the emulator's truth
+    const auto id = end["session"].get<std::int64_t>();
+
+    // The list is what `ballbar sessions --json` prints: the same function of the same database.
+    const auto listed = get_json(c, "/api/sessions");
+    ballbar::storage::StoreOptions so;
+    so.read_only = true;
+    ballbar::storage::Store store(dir.file("sessions.db"), so);
+    EXPECT_EQ(listed, json::parse(ballbar::storage::sessions_json(store)));
+    ASSERT_EQ(listed.size(), 1u);
+    EXPECT_EQ(listed[0]["state"], "completed");
+
+    const auto report = get_json(c, "/api/sessions/" + std::to_string(id) + "/report.json?tolerance_um=80");
+    ASSERT_TRUE(report["circular"].is_object());
+    EXPECT_EQ(report["circular"]["runs"].size(), 2u);
+    EXPECT_EQ(report["circular"]["tolerance"]["circularity_um"], 80.0);
+    EXPECT_FALSE(report["circular"]["runs"][0]["polar"]["angle_deg"].empty());
+    auto pdf = c.Get(("/api/sessions/" + std::to_string(id) + "/report.pdf").c_str());
+    ASSERT_TRUE(pdf);
+    EXPECT_EQ(pdf->status, 200);
+    EXPECT_EQ(pdf->get_header_value("Content-Type"), "application/pdf");
+    EXPECT_EQ(pdf->body.rfind("%PDF-", 0), 0u);
+    auto trace = c.Get(("/api/sessions/" + std::to_string(id) + "/export?format=trace").c_str());
+    ASSERT_TRUE(trace);
+    EXPECT_EQ(trace->status, 200);
+    EXPECT_NE(trace->body.find("ballbar-trace/1"), std::string::npos);
+}
+
+TEST(WebuiApi, SsmDemoShowsEachPointWithItsVerdictAndEndsWithEveryPointAtItsPose) {
+    ballbar::test::ScratchDir dir("webui");
+    Served s(options(dir));
+    auto c = s.client();
+    ASSERT_EQ(post(c, "/api/procedure", {{"procedure", "ssm"}, {"demo", true}, {"machine", "TTTRR"}})->status, 200);
+    std::vector<std::string> asked;
+    const json end = drive_to_end(c, &asked);
+    EXPECT_EQ(end["state"], "completed") << end.dump(2);
+    EXPECT_EQ(asked.front(), "reference");
+    EXPECT_NE(std::find(asked.begin(), asked.end(), "run-program"), asked.end());
+    EXPECT_NE(std::find(asked.begin(), asked.end(), "program-stop"), asked.end());
+    EXPECT_EQ(asked.back(), "review");
+    EXPECT_EQ(end["result"]["wrong_pose"], 0);
+    ASSERT_EQ(end["points"].size(), end["result"]["points"].get<std::size_t>());
+    for (const auto& p : end["points"]) EXPECT_EQ(p["verdict"], "ok") << p.dump();
+    const auto report = get_json(c, "/api/sessions/" + std::to_string(end["session"].get<int>()) + "/report.json");
+    EXPECT_EQ(report["locations"].size(), 8u);  // four tests, two steps each
+}
+
+TEST(WebuiApi, RefusesWhatItMustWithAClearMessage) {
+    ballbar::test::ScratchDir dir("webui");
+    Served s(options(dir));
+    auto c = s.client();
+    auto expect = [](const httplib::Result& r, int status, const std::string& says) {
+        ASSERT_TRUE(r);
+        EXPECT_EQ(r->status, status) << r->body;
+        EXPECT_NE(json::parse(r->body)["error"].get<std::string>().find(says), std::string::npos) << r->body;
+    };
+    expect(c.Post("/api/procedure", "{not json", "application/json"), 400, "malformed");
+    expect(post(c, "/api/procedure", {{"procedure", "drill"}, {"demo", true}}), 400, "\"procedure\"");
+    expect(post(c, "/api/procedure", {{"procedure", "ssm"}}), 400, "device");
+    expect(c.Post("/api/procedure", R"({"procedure":"ssm","demo":true})", "text/plain"), 403, "Content-Type");
+    {
+        httplib::Headers h{{"Origin", "http://evil.example"}};
+        expect(c.Post("/api/procedure", h, R"({"procedure":"ssm","demo":true})", "application/json"), 403,
+               "cross-origin");
+    }
+    {
+        httplib::Headers h{{"Host", "attacker.example:80"}};  // a rebound DNS name
+        expect(c.Get("/api/sessions", h), 403, "Host");
+    }
+    expect(c.Get("/api/sessions/999"), 404, "999");
+    expect(c.Get("/api/sessions/999/report.pdf"), 404, "999");
+    expect(c.Get("/../../etc/passwd"), 404, "no such page");
+    expect(c.Get("/api/procedure/program"), 404, "no program");
+    expect(post(c, "/api/procedure/answer", {{"question", 1}, {"option", 0}}), 409, "no procedure");
+    expect(post(c, "/api/procedure/stop", json::object()), 409, "no procedure");
+
+    // One steers, the others watch: a second screen with its stream open cannot answer or stop.
+    ASSERT_EQ(post(c, "/api/procedure", {{"procedure", "circular"}, {"demo", true}})->status, 200);
+    json state;
+    const auto q = next_question(c, state);
+    ASSERT_GT(q, 0u);
+    expect(post(c, "/api/procedure", {{"procedure", "circular"}, {"demo", true}}), 409, "running");
+    expect(post(c, "/api/procedure/answer", {{"question", q + 1}, {"option", 0}}), 409, "not being asked");
+    expect(post(c, "/api/procedure/answer", {{"question", q}, {"option", 7}}), 400, "option 7");
+    auto other = s.client("page-2");
+    {
+        // The steering page has its event stream open: the second screen may only watch.
+        std::atomic<bool> open{false}, done{false};
+        httplib::Client sse("127.0.0.1", s.port);
+        std::thread stream([&] {
+            sse.Get("/api/events?client=page-1", [&](const char*, std::size_t) {
+                open = true;
+                return !done.load();
+            });
+        });
+        while (!open) std::this_thread::sleep_for(5ms);
+        EXPECT_FALSE(get_json(other, "/api/procedure")["you_steer"].get<bool>());
+        expect(post(other, "/api/procedure/answer", {{"question", q}, {"option", 0}}), 403, "watch");
+        expect(post(other, "/api/procedure/stop", json::object()), 403, "watch");
+        done = true;
+        sse.stop();
+        stream.join();
+    }
+    // Its browser closed: the second screen takes over (once the server notices, within ~2 s).
+    const auto until = std::chrono::steady_clock::now() + 10s;
+    while (!get_json(other, "/api/procedure")["you_steer"].get<bool>() && std::chrono::steady_clock::now() < until)
+        std::this_thread::sleep_for(50ms);
+    EXPECT_TRUE(get_json(other, "/api/procedure")["you_steer"].get<bool>());
+    ASSERT_EQ(post(other, "/api/procedure/stop", json::object())->status, 200);
+    while (get_json(other, "/api/procedure")["running"].get<bool>()) std::this_thread::sleep_for(20ms);
+    EXPECT_EQ(get_json(other, "/api/procedure")["state"], "interrupted");
+}
+
+TEST(WebuiApi, TokenIsNeededOnEveryRequestWhenOneIsSet) {
+    ballbar::test::ScratchDir dir("webui");
+    ServeOptions o = options(dir);
+    o.token = "0123456789abcdef0123456789abcdef";
+    Served s(o);
+    auto c = s.client();
+    EXPECT_EQ(c.Get("/")->status, 401);
+    EXPECT_EQ(c.Get("/api/sessions")->status, 401);
+    EXPECT_EQ(c.Get("/api/sessions?token=0123456789abcdef0123456789abcdee")->status, 401);
+    EXPECT_EQ(c.Get("/api/events?token=wrong")->status, 401);
+    EXPECT_EQ(c.Get("/?token=0123456789abcdef0123456789abcdef")->status, 200);
+    c.set_bearer_token_auth(o.token.c_str());
+    EXPECT_EQ(c.Get("/api/sessions")->status, 200);
+    c.set_bearer_token_auth("0123456789abcdef0123456789abcdeX");
+    EXPECT_EQ(post(c, "/api/procedure", {{"procedure", "ssm"}, {"demo", true}})->status, 401);
+}
+
+TEST(WebuiApi, SecondServerOnTheSamePortFailsToBindInsteadOfSharingIt) {
+    ballbar::test::ScratchDir dir("webui");
+    Served first(options(dir));
+    ServeOptions o = options(dir);
+    o.port = first.port;
+    Server second(o);
+    EXPECT_THROW(second.bind(), std::exception);
+}
+
+TEST(WebuiApi, FiftyViewersWatchAWholeDemoAndEachSeesItsEnd) {
+    ballbar::test::ScratchDir dir("webui");
+    Served s(options(dir));
+    constexpr int kViewers = 50;
+    std::atomic<int> saw_end{0}, saw_live{0}, connected{0};
+    std::vector<std::unique_ptr<httplib::Client>> clients;
+    std::vector<std::thread> viewers;
+    for (int i = 0; i < kViewers; ++i) {
+        clients.push_back(std::make_unique<httplib::Client>("127.0.0.1", s.port));
+        clients.back()->set_read_timeout(60, 0);
+        viewers.emplace_back([&, i] {
+            std::string buf;
+            bool live = false;
+            bool counted = false;
+            clients[static_cast<std::size_t>(i)]->Get(
+                ("/api/events?client=viewer-" + std::to_string(i)).c_str(), [&](const char* d, std::size_t n) {
+                    if (!counted) {
+                        counted = true;
+                        ++connected;
+                    }
+                    buf.append(d, n);
+                    if (!live && buf.find("event: live") != std::string::npos) {
+                        live = true;
+                        ++saw_live;
+                    }
+                    if (buf.find("\"state\":\"completed\"") != std::string::npos) {
+                        ++saw_end;
+                        return false;
+                    }
+                    if (buf.size() > 65536) buf.erase(0, buf.size() - 8192);  // keep the tail
+                    return true;
+                });
+        });
+    }
+    while (connected < kViewers) std::this_thread::sleep_for(10ms);
+    auto c = s.client("driver");
+    EXPECT_EQ(get_json(c, "/api/procedure")["viewers"], kViewers);
+    // A plain request still gets through beside 50 open streams.
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_EQ(c.Get("/api/sessions")->status, 200);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 2s);  // not starved of a worker (it took 1.5 s with 8)
+    ASSERT_EQ(post(c, "/api/procedure", {{"procedure", "circular"}, {"demo", true}})->status, 200);
+    EXPECT_EQ(drive_to_end(c)["state"], "completed");
+    for (auto& v : viewers) v.join();
+    EXPECT_EQ(saw_end, kViewers);
+    EXPECT_EQ(saw_live, kViewers);
+}
+
+TEST(WebuiApi, StopDuringAProcedureKeepsWhatWasMeasuredAndTheSessionResumable) {
+    ballbar::test::ScratchDir dir("webui");
+    auto served = std::make_unique<Served>(options(dir));
+    auto c = served->client();
+    ASSERT_EQ(post(c, "/api/procedure", {{"procedure", "ssm"}, {"demo", true}})->status, 200);
+    json state;
+    // Answer until the review: every point is stored by then, and the question is open.
+    for (;;) {
+        const auto q = next_question(c, state);
+        ASSERT_GT(q, 0u) << state.dump(2);
+        if (state["question"]["what"] == "review") break;
+        post(c, "/api/procedure/answer", {{"question", q}, {"option", 0}});
+    }
+    const auto points = state["points"].size();
+    ASSERT_GT(points, 0u);
+    const auto id = state["session"].get<std::int64_t>();
+    served.reset();  // the server stops (as on SIGTERM) with the question open
+
+    ballbar::storage::StoreOptions so;
+    so.read_only = true;
+    ballbar::storage::Store store(dir.file("sessions.db"), so);
+    const auto info = store.session(id);
+    EXPECT_EQ(info.state, ballbar::storage::SessionState::interrupted);
+    EXPECT_TRUE(info.resumable());
+    EXPECT_EQ(store.points(id).size(), points);
+}
+
+}  // namespace
