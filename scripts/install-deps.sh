@@ -20,6 +20,7 @@ packages=(
   nlohmann-json3-dev   # app/storage: JSON in and out (solve, export, --json)
   libfmt-dev           # app: output formatting
   libcairo2-dev        # reports: vector PDF
+  libcpp-httplib-dev   # webui/: `ballbar serve`'s HTTP server (Server-Sent Events for the live reading)
   linuxcnc-uspace-dev  # linuxcnc/: LinuxCNC's headers (kinematics.h, hal.h, rtapi.h), the ballbarkins module is built against them
   # tests and benchmarks
   libgtest-dev libgmock-dev   # unit and integration tests
@@ -28,6 +29,7 @@ packages=(
   sqlite3                     # the sqlite3 shell: benchmark comparison, inspection
   poppler-utils               # pdftotext/pdfinfo: report tests
   linuxcnc-uspace             # LinuxCNC itself: its headless simulator runs the ballbarkins module's tests
+  chromium chromium-driver python3-selenium  # the browser test of `ballbar serve` (headless Chromium, one command: matching versions)
   clang libclang-rt-14-dev    # libFuzzer targets of every parser (fuzz/, scripts/fuzz.sh)
   # packaging
   help2man                    # man pages generated from the commands' own --help
