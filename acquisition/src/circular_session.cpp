@@ -151,6 +151,7 @@ bool CircularSession::attempt(int number) {
     double searched_at = -1e300;
     int silent = 0;
     std::size_t since_progress = 0;
+    double progress_at_s = -1e300;
     std::array<BarSample, 256> buf{};
     const auto give_up = [&](const std::string& why) {
         a.good = false;
@@ -220,8 +221,9 @@ bool CircularSession::attempt(int number) {
         summary_.samples += kept;
         const double now = samples.back().time_s;
         since_progress += kept;
-        if (since_progress >= 200) {
+        if (since_progress >= 200 || now - progress_at_s >= 0.02 || now < progress_at_s) {  // a screen: 50 Hz
             since_progress = 0;
+            progress_at_s = now;
             Progress p;
             p.state = sm_.state();
             p.done = run;

@@ -343,6 +343,7 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
     };
     bool need_stops = true;
     std::size_t since_progress = 0;
+    double progress_at_s = -1e300;
     const CaptureSettings& cs = plan_.spec.capture;
     std::size_t manual_at = prog.entries.size();
     for (;;) {
@@ -425,8 +426,10 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
                     arm(t_s, 0);
                 }
             }
-            if (++since_progress >= options_.progress_every) {
+            if (++since_progress >= options_.progress_every || t_s - progress_at_s >= options_.progress_interval_s ||
+                t_s < progress_at_s) {  // the device clock restarted (a reconnect)
                 since_progress = 0;
+                progress_at_s = t_s;
                 report_progress();
             }
             if (cursor_ >= prog.entries.size()) return RunEnd::Complete;

@@ -33,6 +33,10 @@ function el(tag, text, cls) {
   return e;
 }
 
+// The stored units as the operator reads them.
+const kUnits = { um: 'µm', um_per_m: 'µm/m', um_per_h: 'µm/h', ppm_per_K: 'ppm/K', deg: '°', hz: 'Hz', urad: 'µrad', urad_per_h: 'µrad/h', um_per_K: 'µm/K' };
+function unit(u) { return kUnits[u] || u; }
+
 function fmt(v, digits) {
   return v === null || v === undefined || Number.isNaN(v) ? '–' : Number(v).toFixed(digits);
 }
@@ -134,7 +138,8 @@ function renderQuestion(q) {
   $('not-yet-note').textContent = 'Take your time: the question stays here until you answer it.';
   const buttons = [];
   q.options.forEach((label, i) => {
-    const b = el('button', label.charAt(0).toUpperCase() + label.slice(1), kDangerous.includes(label) ? 'danger' : 'primary');
+    const text = label.replace(/-/g, ' ');
+    const b = el('button', text.charAt(0).toUpperCase() + text.slice(1), kDangerous.includes(label) ? 'danger' : 'primary');
     b.type = 'button';
     b.dataset.option = String(i);
     b.disabled = true;
@@ -237,7 +242,8 @@ function tick() {
   if (!state || !state.running) { $('time-left').textContent = ''; return; }
   const since = (state.now_ms + (Date.now() - stateAt)) / 1000;
   const g = state.progress || {};
-  if (g.time_left_s > 0) {
+  const measuring = state.step && state.step.n === 4;
+  if (measuring && g.time_left_s > 0) {
     const left = g.time_left_s - (since - g.at_ms / 1000);
     $('time-left').textContent = 'Program time left: ' + clock(left) + ' at 100 % feed' +
       (g.total ? ' · ' + g.done + ' of ' + g.total + ' points' : '');
@@ -250,6 +256,11 @@ setInterval(tick, 250);
 setInterval(() => { liveRate = liveCount; liveCount = 0; $('live-rate').textContent = liveRate + ' readings/s on this screen'; }, 1000);
 
 function renderLive(l) {
+  if (l.bar_mm === 0 && l.expected_mm === 0) {  // the procedure has no reading yet
+    $('live-um').textContent = '–';
+    $('live-mm').textContent = 'no reading yet';
+    return;
+  }
   ++liveCount;
   const dev = (l.bar_mm - l.expected_mm) * 1000;
   $('live-um').textContent = (dev >= 0 ? '+' : '') + dev.toFixed(1) + ' µm';
@@ -402,7 +413,7 @@ async function loadSession(id) {
     polar(c);
     $('diagnostics').tBodies[0].replaceChildren(...c.diagnostics.map((d) => {
       const tr = el('tr');
-      [d.rank || '', d.name, fmt(d.value, 3) + ' ' + d.unit, fmt(d.value_std, 3), d.share_percent ? fmt(d.share_percent, 1) + ' %' : ''].forEach((v) => tr.append(el('td', v)));
+      [d.rank || '', d.name, fmt(d.value, 3) + ' ' + unit(d.unit), fmt(d.value_std, 3), d.share_percent ? fmt(d.share_percent, 1) + ' %' : ''].forEach((v) => tr.append(el('td', v)));
       return tr;
     }));
   }

@@ -121,6 +121,7 @@ class Procedure::WebOperator : public acq::Operator {
         l.fill = pr.fill;
         json& s = p_.state_;
         json& g = s["progress"];
+        if (!g.is_object()) g = json::object();
         const bool moved = g.value("done", std::size_t{0}) != pr.done || g.value("test", -1) != pr.test ||
                            g.value("point", -1) != pr.point;
         g = {{"done", pr.done},
@@ -131,10 +132,7 @@ class Procedure::WebOperator : public acq::Operator {
              {"time_left_s", pr.time_left_s},
              {"at_ms", ms_since(p_.started_)}};
         if (p_.state_.value("step", json::object()).value("n", 0) < 4) p_.set_step(4);
-        if (moved)
-            p_.bump();
-        else
-            p_.changed_.notify_all();
+        if (moved) p_.bump();  // a new reading alone wakes nobody: the streams look at it on their 50 Hz tick
     }
     void run_program(const ba::NcProgram& program, std::span<const std::size_t> points, bool retry) override {
         {
@@ -155,7 +153,7 @@ class Procedure::WebOperator : public acq::Operator {
         Question q;
         q.kind = "acknowledge";
         q.what = "program-stop";
-        q.prompt = "The program stopped (M0): " + stop.what + " Then press cycle start.";
+        q.prompt = "The program stopped (M0): " + stop.what + (stop.what.ends_with('.') ? "" : ".");
         q.options = {"Done, cycle start pressed"};
         if (stop.socket_mm) {
             std::lock_guard lk(p_.mu_);
@@ -175,6 +173,8 @@ class Procedure::WebOperator : public acq::Operator {
                                        {"std_um", c.std_mm * 1e3},
                                        {"n", c.n},
                                        {"verdict", c.operator_accepted ? "kept by the operator" : "ok"}});
+        json& g = p_.state_["progress"];
+        if (g.is_object() && g.contains("done")) g["done"] = g["done"].get<std::size_t>() + 1;
         p_.bump();
     }
     void run_part_program(std::string_view what, bool retry) override {
@@ -204,8 +204,13 @@ class Procedure::WebOperator : public acq::Operator {
 
 // ---- the procedure ----------------------------------------------------------------------------------
 
-Procedure::Procedure(std::string db_path) : db_path_(std::move(db_path)) {
+Procedure::Procedure(std::string db_path)
+    : db_path_(std::move(db_path)), operator_(std::make_unique<WebOperator>(*this)) {
     state_ = {{"running", false}, {"state", "idle"}};
+}
+
+acq::Operator& Procedure::web_operator() {
+    return *operator_;
 }
 
 Procedure::~Procedure() {
@@ -241,6 +246,7 @@ std::size_t Procedure::ask(Question q) {
     q.id = ++question_seq_;
     q.step = step_of_question(q.what);
     set_step(q.step);
+    if (q.step != 4 && state_["progress"].is_object()) state_["progress"]["time_left_s"] = 0;  // no program runs
     log("Asked: " + q.prompt);
     question_ = std::move(q);
     answer_.reset();
@@ -339,7 +345,7 @@ void Procedure::finish(const std::string& state, const std::string& message) {
 void Procedure::run(json request) {
     const std::string procedure = request.value("procedure", "");
     const bool demo = request.value("demo", false);
-    WebOperator op(*this);
+    WebOperator& op = *operator_;
     auto set_session = [this](std::int64_t id) {
         std::lock_guard lk(mu_);
         state_["session"] = id;
@@ -498,9 +504,9 @@ LiveReading Procedure::live() const {
     return live_;
 }
 
-void Procedure::wait_change(std::uint64_t version, std::uint64_t live_seq, std::chrono::milliseconds timeout) const {
+void Procedure::wait_change(std::uint64_t version, std::chrono::milliseconds timeout) const {
     std::unique_lock lk(mu_);
-    changed_.wait_for(lk, timeout, [&] { return version_ != version || live_.seq != live_seq; });
+    changed_.wait_for(lk, timeout, [&] { return version_ != version; });
 }
 
 void Procedure::viewer(const std::string& client, bool open) {

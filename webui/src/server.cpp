@@ -280,7 +280,7 @@ struct Server::Impl {
             "text/event-stream",
             [this, cur, client](std::size_t, httplib::DataSink& sink) {
                 if (stopping) return false;
-                procedure.wait_change(cur->version, cur->live, std::chrono::milliseconds(250));
+                procedure.wait_change(cur->version, kTick);  // a state at once; the reading on the tick
                 if (stopping) return false;
                 std::string out;
                 const auto now = std::chrono::steady_clock::now();
@@ -290,19 +290,15 @@ struct Server::Impl {
                     out += "event: state\ndata: " + s.dump() + "\n\n";
                 }
                 const LiveReading l = procedure.live();
-                if (l.seq != cur->live) {
-                    if (now - cur->last_live < kTick) {  // at most 50 a second: the rest waits a tick
-                        std::this_thread::sleep_for(kTick - (now - cur->last_live));
-                    }
-                    const LiveReading latest = procedure.live();
-                    cur->live = latest.seq;
-                    cur->last_live = std::chrono::steady_clock::now();
+                if (l.seq != cur->live && now - cur->last_live >= kTick - std::chrono::milliseconds(2)) {
+                    cur->live = l.seq;
+                    cur->last_live = now;
                     char buf[200];
                     std::snprintf(buf, sizeof buf,
                                   "event: live\ndata: {\"seq\":%llu,\"bar_mm\":%.6f,\"expected_mm\":%.6f,"
                                   "\"range_mm\":%.3f,\"out_of_range\":%s,\"fill\":%.3f}\n\n",
-                                  static_cast<unsigned long long>(latest.seq), latest.bar_mm, latest.expected_mm,
-                                  latest.range_mm, latest.out_of_range ? "true" : "false", latest.fill);
+                                  static_cast<unsigned long long>(l.seq), l.bar_mm, l.expected_mm, l.range_mm,
+                                  l.out_of_range ? "true" : "false", l.fill);
                     out += buf;
                 }
                 if (out.empty() && now - cur->last_sent > std::chrono::seconds(1)) out = ": still here\n\n";

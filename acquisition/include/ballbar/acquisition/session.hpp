@@ -39,6 +39,9 @@ struct SessionOptions {
     int max_reconnect_attempts = 600;
     /// Samples between two progress reports.
     std::size_t progress_every = 100;
+    /// ... or this much device time, whichever comes first: a screen's live reading at 50 Hz whatever
+    /// the instrument's rate (a 1 kHz bar, a 20 readings/s gauge).
+    double progress_interval_s = 0.02;
     /// Stream time allowed from telling the operator to start a program (or to press cycle start) to
     /// the program's first dwell, on top of the program's own timing.
     double start_grace_s = 120;

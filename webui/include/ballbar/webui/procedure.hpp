@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -67,16 +68,19 @@ class Procedure {
     nlohmann::json snapshot(const std::string& client = {}) const;
     std::uint64_t version() const;
     LiveReading live() const;
-    /// Waits up to `timeout` for a state after `version` or a reading after `live_seq`.
-    void wait_change(std::uint64_t version, std::uint64_t live_seq, std::chrono::milliseconds timeout) const;
+    /// Waits up to `timeout` for a state after `version`. A new live reading wakes nobody (at 1 kHz it
+    /// would wake every stream a thousand times a second): a stream looks at live() on its own tick.
+    void wait_change(std::uint64_t version, std::chrono::milliseconds timeout) const;
 
     /// A viewer's event stream opened or closed. A client that started the procedure steers it; when it
     /// has no stream open (its browser closed), the next client that steers takes over.
     void viewer(const std::string& client, bool open);
     std::size_t viewers() const;
 
-    /// For the operator (procedure thread).
+    /// The operator the procedures talk to: its questions wait for the page's buttons, its progress is
+    /// the live reading. A procedure's thread uses it; so does the stream benchmark (bench/webui).
     class WebOperator;
+    acquisition::Operator& web_operator();
 
   private:
     struct Question {
@@ -112,6 +116,7 @@ class Procedure {
     nlohmann::json state_;  // what snapshot() adds the question to
     std::deque<nlohmann::json> log_;
     std::chrono::steady_clock::time_point started_;
+    std::unique_ptr<WebOperator> operator_;
 };
 
 }  // namespace ballbar::webui
