@@ -11,6 +11,7 @@
 #include "ballbar/storage/session_clock.hpp"
 #include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
+#include "ballbar/workflow/trend.hpp"
 #include "command.hpp"
 #include "figures.hpp"
 #include "files.hpp"
@@ -22,6 +23,8 @@ struct SessionsOptions {
     bool json = false;
     std::string session;
     bool show_json = false;
+    std::string machine;  ///< sessions trend MACHINE
+    bool trend_json = false;
 };
 
 storage::Store open_reader(const Globals& globals) {
@@ -30,11 +33,7 @@ storage::Store open_reader(const Globals& globals) {
     return storage::Store(existing_db_path(globals), so);  // a reader never creates one
 }
 
-std::string machine_label(const analysis::MachineGeometry& m) {
-    std::string s(analysis::to_string(m.type));
-    if (!m.name.empty()) s += " " + m.name;
-    return s;
-}
+using workflow::machine_label;  // "TTTRR mill-1": the list's, the trend's and the web page's
 
 int list_sessions(const SessionsOptions& o, const Globals& globals, std::ostream& out) {
     const std::string path = resolve_db_path(globals);
@@ -213,17 +212,46 @@ int show_session(const SessionsOptions& o, const Globals& globals, std::ostream&
     return kExitOk;
 }
 
-int run_sessions(const SessionsOptions& o, const Globals& globals, bool show) {
+/// `sessions trend MACHINE`: the machine's headline figures across its completed sessions.
+int show_trend(const SessionsOptions& o, const Globals& globals, std::ostream& out) {
+    auto store = open_reader(globals);
+    note_database_damage(store.damage());
+    const auto points = workflow::machine_trend(store, o.machine);
+    if (o.trend_json) {
+        out << workflow::trend_json(o.machine, points) << '\n';
+        return kExitOk;
+    }
+    if (points.empty()) {
+        out << "no completed session of machine \"" << o.machine << "\" holds a result (the machines are the "
+            << "list's column: ballbar sessions)\n";
+        return kExitOk;
+    }
+    out << "machine " << o.machine << ": " << points.size() << " sessions, oldest first\n";
+    for (const auto& p : points) {
+        out << "  " << p.started_at.substr(0, 19) << "  session " << p.session << "  " << p.procedure
+            << (p.demo ? " (demo)" : "") << '\n';
+        for (const auto& [name, value] : p.figures) {
+            char line[96];
+            std::snprintf(line, sizeof line, "      %-22s %10.3f\n", name.c_str(), value);
+            out << line;
+        }
+    }
+    return kExitOk;
+}
+
+int run_sessions(const SessionsOptions& o, const Globals& globals, bool show, bool trend = false) {
     // Stored text (operator, notes, machine names, file names, reasons) is anyone's: the screen gets it
     // with its control characters made visible, never a terminal escape sequence (issue 24).
     std::ostringstream text;
     int code = kExitOk;
     try {
-        code = show ? show_session(o, globals, text) : list_sessions(o, globals, text);
+        code = trend  ? show_trend(o, globals, text)
+               : show ? show_session(o, globals, text)
+                      : list_sessions(o, globals, text);
     } catch (const storage::StorageError& e) {
         throw as_error(e);
     }
-    const bool as_json = show ? o.show_json : o.json;
+    const bool as_json = trend ? o.trend_json : show ? o.show_json : o.json;
     std::cout << (as_json ? text.str() : printable(text.str(), true));
     return code;
 }
@@ -238,8 +266,13 @@ BALLBAR_COMMAND(sessions) {
     auto* show = sub->add_subcommand("show", "Show one session: metadata, audit trail, results");
     show->add_option("SESSION", opts->session, "session id or uuid prefix")->required();
     show->add_flag("--json", opts->show_json, "the whole session as JSON (as `export --format json`)");
-    sub->callback([opts, show, &globals] {
-        const bool is_show = show->parsed();
-        globals.action = [opts, is_show, &globals] { return ballbar::app::run_sessions(*opts, globals, is_show); };
+    auto* trend = sub->add_subcommand("trend", "A machine's headline figures across its completed sessions");
+    trend->add_option("MACHINE", opts->machine, "the machine as the list names it, e.g. \"TTTRR mill-1\"")->required();
+    trend->add_flag("--json", opts->trend_json, "as JSON (what the web page's trend shows)");
+    sub->callback([opts, show, trend, &globals] {
+        const bool is_show = show->parsed(), is_trend = trend->parsed();
+        globals.action = [opts, is_show, is_trend, &globals] {
+            return ballbar::app::run_sessions(*opts, globals, is_show, is_trend);
+        };
     });
 }

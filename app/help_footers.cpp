@@ -53,7 +53,9 @@ const std::map<std::string, std::string>& examples() {
          "  ballbar serve                                # http://127.0.0.1:8230/ on this machine only\n"
          "  ballbar serve --demo                          # the circular demo waits for the first screen\n"
          "  ballbar serve --host 0.0.0.0 --token-file /etc/ballbar/token   # the shop's network, with a token\n"},
-        {"sessions", "  ballbar sessions\n  ballbar sessions show 3 --json\n"},
+        {"sessions",
+         "  ballbar sessions\n  ballbar sessions show 3 --json\n  ballbar sessions trend \"TTTRR mill-1\" --json   # "
+         "headline figures over months\n"},
         {"udev-rules", "  ballbar udev-rules > 70-ballbar-gauges.rules\n  ballbar udev-rules --plugdev\n"},
         {"solve", "  ballbar solve ssm < request.json\n  ballbar solve orientation --input request.json\n"},
     };

@@ -156,6 +156,11 @@ json circular(const Report& r) {
 
 }  // namespace
 
+void set_ssm_tolerances(Report& report, std::optional<double> location_um, std::optional<double> angle_arcsec) {
+    report.location_tolerance_um = location_um;
+    report.angle_tolerance_arcsec = angle_arcsec;
+}
+
 nlohmann::json to_json(const Report& r) {
     json j{{"schema", "ballbar-report/2"}, {"header", header(r.header)}};
 
@@ -169,15 +174,18 @@ nlohmann::json to_json(const Report& r) {
 
     json& locs = j["locations"] = json::array();
     for (const auto& l : r.locations)
-        locs.push_back({{"location", l.location},
-                        {"label", l.label},
-                        {"position_mm", vec(l.position_mm)},
-                        {"dV_um", vec(l.error_um)},
-                        {"dV_um_std", vec(l.uncertainty_um)},
-                        {"magnitude_um", num(l.error_um.norm())},
-                        {"points", l.points},
-                        {"residual_rms_um", opt(l.residual_rms_um)},
-                        {"condition_number", opt(l.condition)}});
+        locs.push_back(
+            {{"location", l.location},
+             {"label", l.label},
+             {"position_mm", vec(l.position_mm)},
+             {"dV_um", vec(l.error_um)},
+             {"dV_um_std", vec(l.uncertainty_um)},
+             {"magnitude_um", num(l.error_um.norm())},
+             {"points", l.points},
+             {"residual_rms_um", opt(l.residual_rms_um)},
+             {"condition_number", opt(l.condition)},
+             {"tolerance_um", opt(r.location_tolerance_um)},
+             {"pass", r.location_tolerance_um ? json(l.error_um.norm() <= *r.location_tolerance_um) : json(nullptr)}});
 
     json& ori = j["orientation"] = json::array();
     for (const auto& o : r.orientation) {
@@ -188,6 +196,10 @@ nlohmann::json to_json(const Report& r) {
         put_angle(e, "exact", o.uncertainty_rad, "_std");
         e["from_location"] = o.from_location;
         e["to_location"] = o.to_location;
+        e["tolerance_arcsec"] = opt(r.angle_tolerance_arcsec);
+        e["pass"] = r.angle_tolerance_arcsec && o.exact_rad
+                        ? json(std::abs(analysis::rad_to_arcsec(*o.exact_rad)) <= *r.angle_tolerance_arcsec)
+                        : json(nullptr);
         ori.push_back(std::move(e));
     }
 

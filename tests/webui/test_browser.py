@@ -261,6 +261,11 @@ def main():
         wait(lambda: page.visible("ssm-results") and len(page.d.find_elements(By.CSS_SELECTOR, "#locations tbody tr")) == 8,
              "the SSM results (8 locations)")
         check(len(page.d.find_elements(By.CSS_SELECTOR, "#orientation tbody tr")) >= 4, "the orientation errors")
+        page.by_id("location-tolerance").send_keys("30")
+        page.by_id("angle-tolerance").send_keys("50")
+        page.js("document.getElementById('angle-tolerance').dispatchEvent(new Event('change'))")
+        wait(lambda: {"PASS", "FAIL"} <= {td.text for td in page.d.find_elements(By.CSS_SELECTOR, "#locations tbody td:last-child, #orientation tbody td:last-child")},
+             "the SSM verdicts against the tolerances typed in")
         page.shot("ssm-session")
 
         # ---- the sessions ----
@@ -269,9 +274,25 @@ def main():
         ids = [r.get_attribute("data-session") for r in page.d.find_elements(By.CSS_SELECTOR, "#demo-sessions tbody tr")]
         check(str(circular_id) in ids and str(state["session"]) in ids, "the sessions appear in the list (demo sessions apart)")
         page.shot("sessions")
+        # The trend of the circular demo's machine, from the machine filter.
+        sel = page.by_id("f-machine")
+        label = [o.text for o in sel.find_elements(By.TAG_NAME, "option") if "circular" in o.text][0]
+        page.js("const s = document.getElementById('f-machine'); s.value = arguments[0]; s.dispatchEvent(new Event('change'));", label)
+        wait(lambda: len(page.d.find_elements(By.CSS_SELECTOR, "#trend-charts svg")) >= 3, "the machine's trend charts")
+        page.shot("sessions-trend")
 
         errors = page.console_errors()
         check(not errors, "no error on the browser's console" + ("" if not errors else ": %s" % errors))
+
+        # SIGTERM with the page still open: the server stops cleanly, exit 0.
+        server.terminate()
+        try:
+            server.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            raise Failed("ballbar serve did not stop within 20 s of SIGTERM")
+        err = server.stderr.read()
+        check(server.returncode == 0 and "stopped" in err,
+              "SIGTERM stops the server cleanly (exit %s)%s" % (server.returncode, "" if server.returncode == 0 else ": " + err[-2000:]))
         print("PASS: %d screenshots in %s" % (page.shots, a.out))
         return 0
     except Failed as e:

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -148,8 +150,78 @@ TEST(WebuiApi, SsmDemoShowsEachPointWithItsVerdictAndEndsWithEveryPointAtItsPose
     EXPECT_EQ(end["result"]["wrong_pose"], 0);
     ASSERT_EQ(end["points"].size(), end["result"]["points"].get<std::size_t>());
     for (const auto& p : end["points"]) EXPECT_EQ(p["verdict"], "ok") << p.dump();
-    const auto report = get_json(c, "/api/sessions/" + std::to_string(end["session"].get<int>()) + "/report.json");
-    EXPECT_EQ(report["locations"].size(), 8u);  // four tests, two steps each
+    const std::string session = std::to_string(end["session"].get<int>());
+    const auto report = get_json(c, "/api/sessions/" + session + "/report.json");
+    EXPECT_EQ(report["locations"].size(), 8u);                                   // four tests, two steps each
+    for (const auto& l : report["locations"]) EXPECT_TRUE(l["pass"].is_null());  // no tolerance, no verdict
+
+    // Verdicts against the user's tolerances: |ΔV| and |angle| within them, each judged on its own.
+    const auto judged =
+        get_json(c, "/api/sessions/" + session + "/report.json?location_tolerance_um=30&angle_tolerance_arcsec=50");
+    int pass = 0, fail = 0;
+    for (const auto& l : judged["locations"]) {
+        const auto& v = l["dV_um"];
+        const double mag = std::sqrt(v[0].get<double>() * v[0].get<double>() + v[1].get<double>() * v[1].get<double>() +
+                                     v[2].get<double>() * v[2].get<double>());
+        EXPECT_EQ(l["pass"].get<bool>(), mag <= 30.0) << l.dump();
+        (l["pass"].get<bool>() ? pass : fail)++;
+    }
+    for (const auto& o : judged["orientation"]) {
+        EXPECT_EQ(o["pass"].get<bool>(), std::abs(o["exact_arcsec"].get<double>()) <= 50.0) << o.dump();
+        (o["pass"].get<bool>() ? pass : fail)++;
+    }
+    EXPECT_GT(pass, 0);
+    EXPECT_GT(fail, 0);  // the demo's errors straddle these tolerances: both verdicts are exercised
+    auto bad = c.Get(("/api/sessions/" + session + "/report.json?angle_tolerance_arcsec=-1").c_str());
+    ASSERT_TRUE(bad);
+    EXPECT_EQ(bad->status, 400);
+    EXPECT_NE(bad->body.find("angle_tolerance_arcsec"), std::string::npos);
+}
+
+TEST(WebuiApi, TrendOfAMachineIsWhatTheCliPrintsAndFollowsEachSessionsResult) {
+    ballbar::test::ScratchDir dir("webui");
+    Served s(options(dir));
+    auto c = s.client();
+    std::vector<double> g;  // each session's G, from its report (the largest of its runs)
+    for (int seed : {1, 2}) {
+        ASSERT_EQ(post(c, "/api/procedure", {{"procedure", "circular"}, {"demo", true}, {"seed", seed}})->status, 200);
+        const json end = drive_to_end(c);
+        ASSERT_EQ(end["state"], "completed");
+        const auto report = get_json(c, "/api/sessions/" + std::to_string(end["session"].get<int>()) + "/report.json");
+        double worst = 0;
+        for (const auto& r : report["circular"]["runs"]) worst = std::max(worst, r["circularity_um"].get<double>());
+        g.push_back(worst);
+    }
+    const std::string machine = get_json(c, "/api/sessions")[0]["machine"]["type"].get<std::string>() + " " +
+                                get_json(c, "/api/sessions")[0]["machine"]["name"].get<std::string>();
+    std::string query;  // percent-encoded
+    for (unsigned char ch : machine) {
+        char hex[4];
+        std::snprintf(hex, sizeof hex, "%%%02X", ch);
+        query += std::isalnum(ch) ? std::string(1, static_cast<char>(ch)) : std::string(hex);
+    }
+    const json trend = get_json(c, "/api/trend?machine=" + query);
+    EXPECT_EQ(trend["machine"], machine);
+    ASSERT_EQ(trend["points"].size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        const auto& f = trend["points"][i]["figures"];
+        EXPECT_NEAR(f["G_um"].get<double>(), g[i], 1e-9);
+        EXPECT_TRUE(f.contains("backlash_x_um") && f.contains("squareness_um_per_m")) << f.dump();
+        EXPECT_TRUE(trend["points"][i]["demo"].get<bool>());
+    }
+    EXPECT_TRUE(get_json(c, "/api/trend?machine=no%20such%20machine")["points"].empty());
+    EXPECT_EQ(c.Get("/api/trend")->status, 400);
+
+    // The CLI prints the same JSON: one use case, one vocabulary.
+    const std::string cmd =
+        std::string(BALLBAR_EXE) + " --db " + dir.file("sessions.db") + " sessions trend '" + machine + "' --json";
+    FILE* pipe = ::popen(cmd.c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::string printed;
+    char buf[4096];
+    for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, pipe)) > 0;) printed.append(buf, n);
+    EXPECT_EQ(::pclose(pipe), 0);
+    EXPECT_EQ(json::parse(printed), trend);
 }
 
 TEST(WebuiApi, RefusesWhatItMustWithAClearMessage) {

@@ -316,8 +316,52 @@ function renderSessions() {
     tr.onclick = () => { location.hash = '#/session/' + s.id; };
     return tr;
   };
+  loadTrend(f.m);
   $('sessions').tBodies[0].replaceChildren(...shown.filter((s) => s.source !== 'emulator').reverse().map(row));
   $('demo-sessions').tBodies[0].replaceChildren(...shown.filter((s) => s.source === 'emulator').reverse().map(row));
+}
+
+// The trend of the machine chosen in the filter: one small chart a figure, its sessions left to right.
+const kFigures = { G_um: 'G, µm', G_b_um: 'G(b), µm', backlash_x_um: 'backlash X, µm', backlash_y_um: 'backlash Y, µm',
+  backlash_z_um: 'backlash Z, µm', squareness_um_per_m: 'squareness, µm/m', dV_max_um: 'largest |ΔV|, µm',
+  d_alpha_arcsec: 'Δα, arcsec', d_beta_arcsec: 'Δβ, arcsec', d_gamma_arcsec: 'Δγ, arcsec' };
+
+// Text into markup: stored text is anyone's (an imported file's dates, names).
+function esc(t) { return String(t).replace(/[&<>"']/g, (c) => '&#' + c.charCodeAt(0) + ';'); }
+
+function chart(title, pts) {
+  const w = 300, h = 150, pad = 30;
+  const vs = pts.map((p) => p.v), lo = Math.min(...vs), hi = Math.max(...vs), span = hi - lo || Math.abs(hi) || 1;
+  const x = (i) => pad + (pts.length > 1 ? i * (w - 2 * pad) / (pts.length - 1) : (w - 2 * pad) / 2);
+  const y = (v) => h - pad - (v - lo) / span * (h - 2 * pad);
+  let svg = '<svg viewBox="0 0 ' + w + ' ' + h + '" class="trend-chart" role="img" aria-label="' + title + '">' +
+    '<text x="6" y="16" class="t-title">' + title + '</text>' +
+    '<text x="6" y="' + (pad + 4) + '" class="t-axis">' + fmt(hi, 2) + '</text>' +
+    '<text x="6" y="' + (h - pad + 4) + '" class="t-axis">' + fmt(lo, 2) + '</text>' +
+    '<polyline class="t-line" points="' + pts.map((p, i) => x(i) + ',' + y(p.v)).join(' ') + '"/>';
+  pts.forEach((p, i) => {
+    svg += '<circle cx="' + x(i) + '" cy="' + y(p.v) + '" r="4" class="' + (p.demo ? 't-demo' : 't-real') + '"><title>session ' +
+      p.session + ', ' + esc(p.at.slice(0, 10)) + ': ' + fmt(p.v, 3) + '</title></circle>';
+  });
+  return svg + '<text x="' + pad + '" y="' + (h - 8) + '" class="t-axis">' + esc(pts[0].at.slice(0, 10)) + '</text>' +
+    '<text x="' + (w - pad - 70) + '" y="' + (h - 8) + '" class="t-axis">' + esc(pts[pts.length - 1].at.slice(0, 10)) + '</text></svg>';
+}
+
+async function loadTrend(machine) {
+  $('trend').hidden = !machine;
+  if (!machine) return;
+  $('trend-title').textContent = 'Trend of ' + machine;
+  try {
+    const t = await api('/api/trend?machine=' + encodeURIComponent(machine));
+    const charts = [];
+    for (const [key, title] of Object.entries(kFigures)) {
+      const pts = t.points.filter((p) => key in p.figures).map((p) => ({ v: p.figures[key], session: p.session, at: p.started_at, demo: p.demo }));
+      if (pts.length) charts.push(chart(title, pts));
+    }
+    $('trend-charts').innerHTML = charts.length ? charts.join('') : '<p>No completed session of this machine holds a result.</p>';
+  } catch (e) {
+    $('trend-charts').textContent = e.message;
+  }
 }
 
 async function loadSessions() {
@@ -369,13 +413,22 @@ function polar(c) {
   c.runs.forEach((run, i) => { g.fillStyle = colours[run.direction]; g.fillText(run.direction + ': G ' + fmt(run.circularity_um, 1) + ' µm', 10, 20 + 18 * i); });
 }
 
+function tolerances() {
+  const q = [];
+  for (const [id, name] of [['tolerance', 'tolerance_um'], ['location-tolerance', 'location_tolerance_um'], ['angle-tolerance', 'angle_tolerance_arcsec']])
+    if ($(id).value) q.push(name + '=' + encodeURIComponent($(id).value));
+  return q.length ? '?' + q.join('&') : '';
+}
+
+function verdict(pass) { return pass === null || pass === undefined ? '–' : pass ? 'PASS' : 'FAIL'; }
+
 async function loadSession(id) {
   $('session-title').textContent = 'Session ' + id;
   const tol = $('tolerance').value;
   let s, rep;
   try {
     [s, rep] = await Promise.all([api('/api/sessions/' + id),
-      api('/api/sessions/' + id + '/report.json' + (tol ? '?tolerance_um=' + encodeURIComponent(tol) : ''))]);
+      api('/api/sessions/' + id + '/report.json' + tolerances())]);
   } catch (e) {
     $('session-title').textContent = 'Session ' + id + ': ' + e.message;
     return;
@@ -383,6 +436,7 @@ async function loadSession(id) {
   const m = s.session;
   $('session-title').textContent = 'Session ' + m.id + ' — ' + m.procedure + ', ' + m.state;
   $('report-pdf').href = withToken('/api/sessions/' + m.id + '/report.pdf' + (tol ? '?tolerance_um=' + encodeURIComponent(tol) : ''));
+  $('session-title').dataset.session = m.id;
   $('export-json').href = withToken('/api/sessions/' + m.id + '/export?format=json');
   $('export-readings').href = withToken('/api/sessions/' + m.id + '/export?format=readings');
   $('export-trace').href = withToken('/api/sessions/' + m.id + '/export?format=trace');
@@ -422,12 +476,15 @@ async function loadSession(id) {
   if (ssm) {
     $('locations').tBodies[0].replaceChildren(...rep.locations.map((l) => {
       const tr = el('tr');
-      [l.label, l.dV_um.map((v) => fmt(v, 2)).join(', '), fmt(l.magnitude_um, 2)].forEach((v) => tr.append(el('td', v)));
+      [l.label, l.dV_um.map((v) => fmt(v, 2)).join(', '), fmt(l.magnitude_um, 2), verdict(l.pass)].forEach((v) => tr.append(el('td', v)));
+      tr.lastChild.className = l.pass === true ? 'ok' : l.pass === false ? 'error' : '';
       return tr;
     }));
     $('orientation').tBodies[0].replaceChildren(...rep.orientation.map((o) => {
       const tr = el('tr');
-      [o.angle, o.axis, fmt(o.exact_arcsec, 2), fmt(o.exact_arcsec_std, 3)].forEach((v) => tr.append(el('td', v)));
+      [o.angle.replace('d_alpha', 'Δα').replace('d_beta', 'Δβ').replace('d_gamma', 'Δγ'), o.axis, fmt(o.exact_arcsec, 2),
+        fmt(o.exact_arcsec_std, 3), verdict(o.pass)].forEach((v) => tr.append(el('td', v)));
+      tr.lastChild.className = o.pass === true ? 'ok' : o.pass === false ? 'error' : '';
       return tr;
     }));
   }
@@ -435,7 +492,7 @@ async function loadSession(id) {
   $('gaps').textContent = gaps.length ? gaps.length + ' gaps, ' + fmt(gaps.reduce((a, g) => a + (g.duration_s || 0), 0), 3) + ' s in all' : 'none';
   $('session-log').replaceChildren(...(rep.procedure || []).map((p) => el('li', p.at.replace('T', ' ').slice(0, 23) + '  ' + p.step + ': ' + (p.detail || ''))));
 }
-$('tolerance').onchange = () => { const r = route(); if (r.id) loadSession(r.id); };
+['tolerance', 'location-tolerance', 'angle-tolerance'].forEach((id) => { $(id).onchange = () => { const r = route(); if (r.id) loadSession(r.id); }; });
 
 // ---- routes -----------------------------------------------------------------------------------------
 

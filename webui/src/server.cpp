@@ -6,10 +6,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <thread>
 
 #include "assets.hpp"
@@ -19,6 +21,7 @@
 #include "ballbar/storage/store.hpp"
 #include "ballbar/workflow/error.hpp"
 #include "ballbar/workflow/import_export.hpp"
+#include "ballbar/workflow/trend.hpp"
 // Last: httplib.h brings <resolv.h>, whose `_res` macro breaks Eigen's headers included after it.
 #include <httplib.h>
 
@@ -71,6 +74,17 @@ int status_of(ErrorCategory c) {
 void send_error(httplib::Response& res, int status, const std::string& message) {
     res.status = status;
     res.set_content(json{{"error", message}}.dump(), "application/json");
+}
+
+/// A query parameter that must be a number > 0 when given (a tolerance); ApiError 400 naming it otherwise.
+std::optional<double> positive_param(const httplib::Request& req, const char* name) {
+    if (!req.has_param(name) || req.get_param_value(name).empty()) return std::nullopt;
+    const std::string text = req.get_param_value(name);
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (end != text.c_str() + text.size() || !(v > 0) || !std::isfinite(v))
+        throw ApiError(400, std::string(name) + " must be a number > 0, not \"" + text + "\"");
+    return v;
 }
 
 /// Equal in a time that does not tell how much of the token was right.
@@ -217,6 +231,14 @@ struct Server::Impl {
             auto store = reader();
             res.set_content(store ? storage::sessions_json(*store) : "[]", "application/json");
         });
+        http.Get("/api/trend", [this](const httplib::Request& req, httplib::Response& res) {
+            if (!req.has_param("machine")) throw ApiError(400, "give ?machine=LABEL (as the session list shows it)");
+            const std::string machine = req.get_param_value("machine");
+            auto store = reader();
+            res.set_content(workflow::trend_json(machine, store ? workflow::machine_trend(*store, machine)
+                                                                : std::vector<workflow::TrendPoint>{}),
+                            "application/json");
+        });
         http.Get(R"(/api/sessions/([0-9A-Za-z-]+))", [this](const httplib::Request& req, httplib::Response& res) {
             with_session(req, res, [&](storage::Store& s, std::int64_t id) {
                 res.set_content(storage::session_json(s, id, true), "application/json");
@@ -228,11 +250,9 @@ struct Server::Impl {
                          report::BuildOptions bo;
                          bo.software_version = o.software_version;
                          report::Report r = report::build_report(s, id, bo);
-                         if (req.has_param("tolerance_um")) {
-                             const double t = std::stod(req.get_param_value("tolerance_um"));
-                             if (!(t > 0 && std::isfinite(t))) throw ApiError(400, "tolerance_um must be > 0");
-                             report::set_circular_tolerance(r, t);
-                         }
+                         if (const auto t = positive_param(req, "tolerance_um")) report::set_circular_tolerance(r, *t);
+                         report::set_ssm_tolerances(r, positive_param(req, "location_tolerance_um"),
+                                                    positive_param(req, "angle_tolerance_arcsec"));
                          if (req.matches[2] == "json") {
                              res.set_content(report::to_json(r).dump(), "application/json");
                              return;

@@ -208,11 +208,19 @@ struct Report {
     std::vector<std::string> discovery_notes;  ///< the noise floor and the verdicts on the residual
     std::vector<CompensationAxis> compensation;
     std::string compensation_metric;  ///< what the bars show, e.g. "max |error| over the check path"
+    /// The user's tolerances for the SSM results (set_ssm_tolerances); none: no verdict.
+    std::optional<double> location_tolerance_um, angle_tolerance_arcsec;
 };
 
 /// Judges a circular test against `tolerance_um` (G, µm) given by the user instead of the stored one.
 /// No effect on a report without a circular test.
 void set_circular_tolerance(Report& report, double tolerance_um);
+
+/// Judges the SSM results against the user's tolerances: a location passes when |ΔV| is within
+/// `location_um`, an orientation error when |exact| is within `angle_arcsec` (to_json's "pass" on each;
+/// null where no tolerance is given or the value is unknown). The uncertainties are not subtracted: they
+/// are reported beside each value (docs/report.md).
+void set_ssm_tolerances(Report& report, std::optional<double> location_um, std::optional<double> angle_arcsec);
 
 /// The same content as data (schema "ballbar-report/1", docs/report.md).
 nlohmann::json to_json(const Report& report);
