@@ -333,7 +333,7 @@ function chart(title, pts) {
   const w = 300, h = 150, pad = 30;
   const vs = pts.map((p) => p.v), lo = Math.min(...vs), hi = Math.max(...vs), span = hi - lo || Math.abs(hi) || 1;
   const x = (i) => pad + (pts.length > 1 ? i * (w - 2 * pad) / (pts.length - 1) : (w - 2 * pad) / 2);
-  const y = (v) => h - pad - (v - lo) / span * (h - 2 * pad);
+  const y = (v) => (hi === lo ? h / 2 : h - pad - (v - lo) / span * (h - 2 * pad));  // one value: mid-height
   let svg = '<svg viewBox="0 0 ' + w + ' ' + h + '" class="trend-chart" role="img" aria-label="' + title + '">' +
     '<text x="6" y="16" class="t-title">' + title + '</text>' +
     '<text x="6" y="' + (pad + 4) + '" class="t-axis">' + fmt(hi, 2) + '</text>' +
