@@ -230,6 +230,7 @@ bool CircularSession::attempt(int number) {
             p.total = test_.runs.size();
             p.live_mm = samples.back().measured_mm;
             p.expected_mm = test_.radius_mm;
+            p.range_mm = status_.range_mm.value_or(0.0);
             p.out_of_range = !out_of_range.empty() && out_of_range.back() + 1 == samples.size();
             op_.progress(p);
         }

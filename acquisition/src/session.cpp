@@ -622,7 +622,8 @@ void Session::report_progress() {
             p.time_left_s += entry_time_s(program_->entries[k]);
     }
     p.live_mm = attributor_->last_length_mm();
-    p.out_of_range = std::abs(p.live_mm - plan_.spec.bar_length_mm) >= 1.0;
+    p.range_mm = status_.range_mm.value_or(0.0);
+    p.out_of_range = std::abs(p.live_mm - plan_.spec.bar_length_mm) >= status_.range_mm.value_or(1.0);
     p.fill = attributor_->fill();
     op_.progress(p);
 }

@@ -17,6 +17,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import urllib.request
 
 SKIP = 77
 
@@ -165,6 +166,111 @@ def run_procedure(p, start_button, name, expect_whats):
     return state
 
 
+def observe(p, client):
+    """The page's last state in window.__state for the checks (a hook of the test, fed by the stream's own
+    events); opened again when a navigation reloaded the page."""
+    p.js("""if (!window.__observer) {
+          window.__state = null;
+          window.__observer = new EventSource('/api/events?client=' + arguments[0]);
+          window.__observer.addEventListener('state', (e) => { window.__state = JSON.parse(e.data); });
+        }""", client)
+    wait(lambda: p.js("return window.__state !== null"), "the observer's state")
+
+
+def answer_until(p, name, stop_at):
+    """Answers the page's questions with their first option until the question `stop_at` is asked (returns
+    it) or the procedure ends (returns None). At "run the part program" the program is downloaded from
+    the page's link, as the operator carries it to the controller (written where the emulated machine
+    loads it)."""
+    while True:
+        got = wait(lambda: p.question() or (not json.loads(p.js("return JSON.stringify(window.__state)"))["running"]
+                                             and "end"), name + ": the next question or the end", timeout=120)
+        if got == "end":
+            return None
+        q, buttons = got
+        if q["what"] == stop_at:
+            return q
+        if q["what"] == "run-part-program":
+            link = p.by_id("program-download")
+            check(p.visible("program-link"), name + ": the program's download link is shown")
+            with urllib.request.urlopen(link.get_attribute("href")) as r:
+                program = r.read()
+            with open(p.program_file, "wb") as f:
+                f.write(program)
+        buttons[0].click()
+        wait(lambda: p.by_id("answers").get_attribute("data-q") != str(q["id"]) or not p.question(),
+             "the answer to be taken")
+
+
+def run_device_stop_and_resume(p, url, ballbar, scratch, env):
+    """The circular test on `ballbar emulate --pty` (the ball-bar's own protocol on a pseudo-terminal),
+    typed into the start panel as an operator would; Stop (asked twice) at the program's question; the
+    session's page resumes it on the same instrument to its end. Returns the session's id."""
+    p.program_file = os.path.join(scratch, "circle.ngc")
+    cfg = os.path.join(scratch, "emulator.json")
+    with open(cfg, "w") as f:
+        json.dump({"instrument": {"calibrated_length_mm": 100, "noise_um": 0.15},
+                   "machine": {"start": {"X_mm": 100.8, "Y_mm": 0, "Z_mm": 0}},
+                   "program": {"file": p.program_file, "dialect": "linuxcnc"},
+                   "continuous": {"backlash_um": {"X": 4}, "squareness_um_per_m": {"XY": 40}}}, f)
+    emu = subprocess.Popen([ballbar, "emulate", "--pty", "--fast", "--config", cfg], stdout=subprocess.PIPE,
+                           stderr=subprocess.DEVNULL, text=True, env=env)
+    try:
+        pty = emu.stdout.readline().strip()
+        check(pty.startswith("/dev/pts/"), "ballbar emulate serves the bar on " + pty)
+        p.d.get(url + "#/")
+        observe(p, "test-observer-3")
+        wait(lambda: p.visible("start") or p.visible("new-procedure"), "the start panel or the last result")
+        if not p.visible("start"):
+            p.by_id("new-procedure").click()
+        p.by_id("c-device").send_keys("serial:" + pty)
+        p.js("document.getElementById('c-dialect').value = 'linuxcnc'")
+        feed = p.by_id("c-feed")
+        feed.clear()
+        feed.send_keys("2000")
+        p.by_id("start-circular").click()
+        wait(lambda: p.visible("run"), "the procedure's screen")
+        q = answer_until(p, "instrument", "run-part-program")
+        check(q is not None, "the instrument's procedure asks to run the part program")
+        check(p.visible("program-link"), "the program's download link is shown with the question")
+        p.shot("instrument-run-program")
+        session = json.loads(p.js("return JSON.stringify(window.__state)"))["session"]
+        # Stop asks twice: "No, go on" keeps it running; "Yes, stop it" stops it, resumable.
+        p.by_id("stop").click()
+        wait(lambda: p.visible("confirm-stop"), "the stop's confirmation")
+        p.shot("instrument-stop-confirm")
+        p.by_id("stop-no").click()
+        time.sleep(0.3)
+        check(json.loads(p.js("return JSON.stringify(window.__state)"))["running"], "No, go on: the procedure goes on")
+        p.by_id("stop").click()
+        wait(lambda: p.visible("confirm-stop"), "the stop's confirmation again")
+        p.by_id("stop-yes").click()
+        wait(lambda: json.loads(p.js("return JSON.stringify(window.__state)"))["state"] == "interrupted", "interrupted")
+        p.shot("instrument-stopped")
+        # The session's page offers Resume; the same instrument, typed in.
+        p.d.get(url + "#/session/%d" % session)
+        observe(p, "test-observer-4")
+        wait(lambda: p.visible("resume"), "the Resume panel of the interrupted session")
+        check("runs again" in p.by_id("resume-note").text, "the resume says what it does (%s)" % p.by_id("resume-note").text)
+        p.by_id("resume-device").send_keys("serial:" + pty)
+        p.shot("instrument-resume")
+        p.by_id("resume-go").click()
+        wait(lambda: p.visible("run"), "the resumed procedure's screen")
+        answer_until(p, "instrument (resumed)", None)
+        state = json.loads(p.js("return JSON.stringify(window.__state)"))
+        check(state["state"] == "completed" and state["session"] == session,
+              "the resumed session completed (%s)" % state.get("message"))
+        check(len(state["result"]["runs"]) == 2, "both runs measured after the resume")
+        p.shot("instrument-resumed-finished")
+        return session
+    finally:
+        emu.send_signal(2)
+        try:
+            emu.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            emu.kill()
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--ballbar", required=True)
@@ -268,11 +374,16 @@ def main():
              "the SSM verdicts against the tolerances typed in")
         page.shot("ssm-session")
 
+        # ---- an instrument on its real protocol (`ballbar emulate --pty`), stopped, then resumed ----
+        real_id = run_device_stop_and_resume(page, url, a.ballbar, scratch, env)
+
         # ---- the sessions ----
         page.by_id("nav-sessions").click()
         wait(lambda: len(page.d.find_elements(By.CSS_SELECTOR, "#demo-sessions tbody tr")) == 2, "both sessions listed")
         ids = [r.get_attribute("data-session") for r in page.d.find_elements(By.CSS_SELECTOR, "#demo-sessions tbody tr")]
         check(str(circular_id) in ids and str(state["session"]) in ids, "the sessions appear in the list (demo sessions apart)")
+        real = [r.get_attribute("data-session") for r in page.d.find_elements(By.CSS_SELECTOR, "#sessions tbody tr")]
+        check(real == [str(real_id)], "the instrument's session is listed apart from the demos (%s)" % real)
         page.shot("sessions")
         # The trend of the circular demo's machine, from the machine filter.
         sel = page.by_id("f-machine")

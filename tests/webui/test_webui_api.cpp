@@ -19,80 +19,15 @@
 #include "../scratch_dir.hpp"
 #include "ballbar/storage/session_export.hpp"
 #include "ballbar/storage/store.hpp"
-#include "ballbar/webui/server.hpp"
-// After Eigen (through the headers above): httplib.h brings <resolv.h>, whose `_res` macro breaks
-// Eigen's product kernels when they come later.
-#include <httplib.h>
+#include "webui_client.hpp"
 
 namespace {
 
 using json = nlohmann::json;
 using ballbar::webui::ServeOptions;
 using ballbar::webui::Server;
+using namespace ballbar::test::webui;
 using namespace std::chrono_literals;
-
-/// A server on a free loopback port, serving on a thread of the test.
-class Served {
-  public:
-    explicit Served(ServeOptions o) : server(std::move(o)) {
-        port = server.bind();
-        thread = std::thread([this] { server.run(); });
-    }
-    ~Served() {
-        server.stop();
-        thread.join();
-    }
-    httplib::Client client(const std::string& id = "page-1") const {
-        httplib::Client c("127.0.0.1", port);
-        c.set_read_timeout(30, 0);
-        c.set_default_headers({{"X-Ballbar-Client", id}});
-        return c;
-    }
-    Server server;
-    int port = 0;
-    std::thread thread;
-};
-
-ServeOptions options(const ballbar::test::ScratchDir& dir) {
-    ServeOptions o;
-    o.port = 0;
-    o.db_path = dir.file("sessions.db");
-    return o;
-}
-
-json get_json(httplib::Client& c, const std::string& path) {
-    auto r = c.Get(path.c_str());
-    if (!r) throw std::runtime_error("no answer to GET " + path);
-    if (r->status != 200) throw std::runtime_error("GET " + path + ": " + std::to_string(r->status) + " " + r->body);
-    return json::parse(r->body);
-}
-
-httplib::Result post(httplib::Client& c, const std::string& path, const json& body) {
-    return c.Post(path.c_str(), body.dump(), "application/json");
-}
-
-/// Waits until the procedure asks a question (its id) or has ended (0).
-std::uint64_t next_question(httplib::Client& c, json& state, std::chrono::seconds within = 60s) {
-    const auto until = std::chrono::steady_clock::now() + within;
-    while (std::chrono::steady_clock::now() < until) {
-        state = get_json(c, "/api/procedure");
-        if (state["question"].is_object()) return state["question"]["id"].get<std::uint64_t>();
-        if (!state["running"].get<bool>()) return 0;
-        std::this_thread::sleep_for(20ms);
-    }
-    throw std::runtime_error("no question and no end within the time");
-}
-
-/// Answers every question with its first option, as an operator clicking through; the final state.
-json drive_to_end(httplib::Client& c, std::vector<std::string>* asked = nullptr) {
-    json state;
-    while (const auto q = next_question(c, state)) {
-        if (asked) asked->push_back(state["question"]["what"].get<std::string>());
-        auto r = post(c, "/api/procedure/answer", {{"question", q}, {"option", 0}});
-        EXPECT_TRUE(r && r->status == 200) << (r ? r->body : "no answer");
-    }
-    return state;
-}
 
 TEST(WebuiApi, CircularDemoFromStartToReportAsThePageDrivesIt) {
     ballbar::test::ScratchDir dir("webui");

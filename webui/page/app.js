@@ -82,16 +82,36 @@ function readFile(input) {
   });
 }
 
+// Why a session is in its state, said once ("interrupted: interrupted by the operator" reads "by the operator").
+function stateReason(m) {
+  let r = m.state_reason || '';
+  for (let i = 0; i < 2; ++i) {
+    if (r.startsWith(m.state + ': ')) r = r.slice(m.state.length + 2);
+    else if (r.startsWith(m.state + ' ')) r = r.slice(m.state.length + 1);
+  }
+  return r;
+}
+
+// A demo's pulled cable: the emulated instrument goes silent 20 s into the measurement (its own clock)
+// and answers again 6 s later (the emulator's "faults", docs/emulator.md).
+const PULLED_CABLE = { disconnect_at_s: 20, disconnect_s: 6 };
+
 function circularRequest(demo) {
   const body = { procedure: 'circular', demo, plane: $('c-plane').value,
     radius_mm: Number($('c-radius').value), feed_mm_min: Number($('c-feed').value) };
-  if (!demo) body.device = $('c-device').value.trim();
+  if (!demo) {
+    body.device = $('c-device').value.trim();
+    body.dialect = $('c-dialect').value;
+  } else if ($('c-pull').checked) {
+    body.faults = PULLED_CABLE;
+  }
   return body;
 }
 
 $('start-circular-demo').onclick = () => start(circularRequest(true));
 $('start-circular').onclick = () => start(circularRequest(false));
-$('start-ssm-demo').onclick = () => start({ procedure: 'ssm', demo: true, machine: $('s-machine').value });
+$('start-ssm-demo').onclick = () => start(Object.assign({ procedure: 'ssm', demo: true, machine: $('s-machine').value },
+  $('s-pull').checked ? { faults: PULLED_CABLE } : {}));
 $('start-ssm').onclick = async () => {
   try {
     const machine_file = await readFile($('s-machine-file'));
@@ -213,7 +233,7 @@ function render() {
   $('step-title').textContent = 'Step ' + step.n + ' of ' + step.of + ': ' + step.name +
     (state.procedure === 'circular' ? ' — circular test' : ' — two-step SSM') + (state.demo ? ' (demo)' : '');
   renderQuestion(state.question);
-  $('program-link').hidden = !(state.question && state.question.what === 'run-program' && state.program);
+  $('program-link').hidden = !(state.question && (state.question.what === 'run-program' || state.question.what === 'run-part-program') && state.program);
   $('program-download').href = withToken('/api/procedure/program');
   $('sketch').innerHTML = sketch(step.n, state.question);
   $('lost').hidden = !state.lost;
@@ -266,11 +286,14 @@ function renderLive(l) {
   $('live-um').textContent = (dev >= 0 ? '+' : '') + dev.toFixed(1) + ' µm';
   $('live-um').className = 'live-um' + (l.out_of_range ? ' out' : '');
   $('live-mm').textContent = 'bar ' + l.bar_mm.toFixed(4) + ' mm, expected ' + l.expected_mm.toFixed(4) + ' mm';
-  const frac = Math.max(-1, Math.min(1, dev / (l.range_mm * 1000)));
+  // The bar graph spans the instrument's range (±1 mm drawn when it does not say its range).
+  const range_um = l.range_mm > 0 ? l.range_mm * 1000 : 1000;
+  const frac = Math.max(-1, Math.min(1, dev / range_um));
   const fill = $('bar-fill');
   fill.style.left = (50 + Math.min(0, frac) * 50) + '%';
   fill.style.width = Math.abs(frac) * 50 + '%';
-  $('live-range').textContent = l.out_of_range ? 'OUT OF RANGE (beyond ±' + l.range_mm + ' mm)' : 'range ±' + (l.range_mm * 1000).toFixed(0) + ' µm';
+  $('live-range').textContent = l.out_of_range ? 'OUT OF RANGE' + (l.range_mm > 0 ? ' (beyond ±' + range_um.toFixed(0) + ' µm)' : '')
+    : l.range_mm > 0 ? 'range ±' + range_um.toFixed(0) + ' µm' : 'the instrument does not say its range: ±1000 µm drawn';
 }
 
 function connect() {
@@ -443,7 +466,8 @@ async function loadSession(id) {
   $('export-trace').hidden = m.procedure !== 'circular';
   $('export-readings').hidden = m.procedure === 'circular';
   $('resume').hidden = !m.resumable;
-  $('resume-note').textContent = m.resumable ? 'Stopped: ' + (m.state_reason || m.state) + '. It goes on from the points it has.' : '';
+  $('resume-note').textContent = m.resumable ? 'Stopped: ' + (stateReason(m) || m.state) + '. ' +
+    (m.procedure === 'circular' ? 'The program runs again for the runs it lacks.' : 'It goes on from the points it has.') : '';
   $('resume-go').onclick = async () => {
     try {
       await api('/api/procedure', { procedure: m.procedure === 'circular' ? 'circular' : 'ssm', resume: String(m.id), device: $('resume-device').value.trim() });
@@ -453,7 +477,7 @@ async function loadSession(id) {
   const h = rep.header, t = h.temperatures_C || {};
   const inst = h.instrument ? h.instrument.model + ' ' + h.instrument.serial + ', firmware ' + h.instrument.firmware : null;
   kv($('conditions'), [['machine', machineName(m)], ['instrument', inst], ['operator', m.operator], ['started', m.started_at],
-    ['ended', m.ended_at], ['state', m.state + (m.state_reason ? ' (' + m.state_reason + ')' : '')], ['notes', m.notes],
+    ['ended', m.ended_at], ['state', m.state + (stateReason(m) ? ' (' + stateReason(m) + ')' : '')], ['notes', m.notes],
     ['bar temperature', t.bar ? fmt(t.bar.min, 2) + '–' + fmt(t.bar.max, 2) + ' °C' : null],
     ['air temperature', t.air ? fmt(t.air.min, 2) + '–' + fmt(t.air.max, 2) + ' °C' : null]]);
   const c = rep.circular;

@@ -5,9 +5,11 @@
 #include <limits>
 #include <sstream>
 
+#include "ballbar/acquisition/circle_program.hpp"
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/acquisition/plan.hpp"
 #include "ballbar/analysis/nc_program.hpp"
+#include "ballbar/device/emulator.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/workflow/circular_demo.hpp"
 #include "ballbar/workflow/circular_measure.hpp"
@@ -45,6 +47,19 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 std::string where(const acq::PlannedPoint& p) {
     return "test " + std::to_string(p.test + 1) + " step " + std::to_string(p.step) + " point " +
            std::to_string(p.point + 1);
+}
+
+/// A demo's "faults" (the emulator's "faults" object of docs/emulator.md: a dropped link, lost frames, …);
+/// none when the request has none. Throws ApiError (400) on one the emulator would refuse.
+device::FaultConfig demo_faults(const json& request) {
+    const auto it = request.find("faults");
+    if (it == request.end() || it->is_null()) return {};
+    if (!it->is_object()) throw ApiError(400, "\"faults\" must be an object (docs/emulator.md)");
+    try {
+        return device::parse_emulator_config(json{{"faults", *it}}.dump()).faults;
+    } catch (const std::exception& e) {
+        throw ApiError(400, std::string("\"faults\": ") + e.what());
+    }
 }
 
 }  // namespace
@@ -117,6 +132,7 @@ class Procedure::WebOperator : public acq::Operator {
         ++l.seq;
         l.bar_mm = pr.live_mm;
         l.expected_mm = pr.expected_mm;
+        l.range_mm = pr.range_mm;
         l.out_of_range = pr.out_of_range;
         l.fill = pr.fill;
         json& s = p_.state_;
@@ -274,6 +290,9 @@ json Procedure::start(const json& request, const std::string& client) {
     if (!demo && resume.empty() && procedure == "ssm" &&
         (!request.contains("machine_file") || !request.contains("plan_file")))
         throw ApiError(400, "an SSM measurement needs \"machine_file\" and \"plan_file\" (their JSON text)");
+    if (!demo && request.contains("faults"))
+        throw ApiError(400, "\"faults\" are the emulator's: only a demo takes them");
+    demo_faults(request);  // refused here, not on the procedure's thread
     if (client.empty()) throw ApiError(400, "no client id (X-Ballbar-Client header)");
     std::lock_guard lk(mu_);
     if (running_) throw ApiError(409, "a procedure is running: one screen steers it, others watch");
@@ -370,6 +389,7 @@ void Procedure::run(json request) {
                 d.test = workflow::circular_test_spec(in);
                 d.seed = request.value("seed", std::uint64_t{1});
                 d.notes = "ballbar serve: circular demo";
+                d.faults = demo_faults(request);
                 d.stop = &stop_;
                 d.on_started = [&](const std::string&, std::int64_t id) {
                     session = id;
@@ -389,7 +409,21 @@ void Procedure::run(json request) {
                     if (session) set_session(*session);
                 } else {
                     prepared.test = workflow::circular_test_spec(in);
+                    const auto dialect = ba::parse_nc_dialect(request.value("dialect", "fanuc"));
+                    if (!dialect)
+                        throw workflow::Error(workflow::ErrorCategory::bad_input,
+                                              "\"dialect\" must be \"fanuc\" or \"linuxcnc\"");
+                    prepared.dialect = *dialect;
                 }
+                // The part program the operator downloads from the page and loads on the controller; a
+                // feed-in fitted to the bar's range changes it before it is asked for.
+                const auto offer_program = [this, &prepared](const circ::TestSpec& test) {
+                    std::string text = acq::circular_program(test, prepared.dialect, prepared.dwell_s);
+                    std::lock_guard lk(mu_);
+                    state_["program"] = {{"text", std::move(text)}, {"runs", test.runs.size()}, {"retry", false}};
+                    bump();
+                };
+                offer_program(prepared.test);
                 workflow::CircularMeasureOptions mo;
                 mo.device_uri = request.value("device", "");
                 mo.operator_name = request.value("operator", "");
@@ -400,8 +434,9 @@ void Procedure::run(json request) {
                     session = id;
                     set_session(id);
                 };
+                mo.on_test_fitted = offer_program;
                 const auto r = workflow::measure_circular(store, prepared, op, mo);
-                workflow::throw_unless_completed(r.summary, r.session_id, "the page's Resume button");
+                workflow::throw_unless_completed(r.summary, r.session_id, "the Resume button of the session's page.");
                 if (r.stored)
                     for (const auto& run : r.stored->result.runs)
                         result["runs"].push_back({{"direction", circ::direction_name(run.direction)},
@@ -415,6 +450,7 @@ void Procedure::run(json request) {
             d.machine = *type;
             d.seed = request.value("seed", std::uint64_t{1});
             d.notes = "ballbar serve: SSM demo";
+            d.faults = demo_faults(request);
             d.front = &op;
             d.stop = &stop_;
             workflow::SsmDemoEvents ev;
@@ -463,8 +499,10 @@ void Procedure::run(json request) {
                                 " stored with its results.");
     } catch (const workflow::Error& e) {
         const bool interrupted = e.category() == workflow::ErrorCategory::interrupted || stop_.load();
+        const std::string what = e.what();
+        const bool said = what.find("everything measured is stored") != std::string::npos;
         finish(interrupted ? "interrupted" : "failed",
-               std::string(e.what()) + (interrupted && session ? " Everything measured is stored." : ""));
+               what + (interrupted && session && !said ? " Everything measured is stored." : ""));
     } catch (const std::exception& e) {
         const auto category = workflow::category_of(e);
         finish(category == workflow::ErrorCategory::interrupted ? "interrupted" : "failed", e.what());

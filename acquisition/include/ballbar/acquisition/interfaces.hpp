@@ -134,6 +134,7 @@ struct Progress {
     double expected_mm = 0;
     double fill = 0;            ///< 0..1 of the current averaging window
     double time_left_s = 0;     ///< the running program's remaining time at 100 % feed
+    double range_mm = 0;        ///< the transducer's range (±) around its zero; 0 when the instrument does not say
     bool out_of_range = false;  ///< the latest sample is beyond the transducer's range
 };
 

@@ -39,7 +39,7 @@ struct LiveReading {
     std::uint64_t seq = 0;  ///< changes with every new reading
     double bar_mm = 0;
     double expected_mm = 0;
-    double range_mm = 1.0;  ///< the transducer's range (±) around the expected length
+    double range_mm = 0;  ///< the transducer's range (±) around its zero; 0: the instrument does not say
     bool out_of_range = false;
     double fill = 0;  ///< 0..1 of the averaging window (SSM)
 };
