@@ -145,6 +145,35 @@ std::optional<std::string> unknown_command(const CLI::App& root, int argc, char*
     return std::nullopt;
 }
 
+/// "--devce" on `measure`: "did you mean --device?" — the long option of the command (or of the
+/// commands above it) a small slip away from an option the command does not have; empty when none is.
+std::string option_suggestion(CLI::App& root, int argc, char** argv) {
+    std::vector<CLI::App*> chain = {&root};
+    std::string suggestion;
+    for (int i = 1; i < argc; ++i) {
+        const std::string_view arg = argv[i];
+        if (!arg.starts_with("--")) {
+            auto subs = chain.back()->get_subcommands([arg](const CLI::App* s) { return s->get_name() == arg; });
+            if (!subs.empty()) chain.push_back(subs.front());
+            continue;
+        }
+        const std::string name(
+            arg.substr(2, arg.find('=') == std::string_view::npos ? std::string_view::npos : arg.find('=') - 2));
+        std::vector<std::string> known;
+        for (const CLI::App* app : chain)
+            for (const CLI::Option* o : app->get_options())
+                for (const std::string& l : o->get_lnames()) known.push_back(l);
+        if (name.empty() || std::find(known.begin(), known.end(), name) != known.end()) continue;
+        std::size_t best_d = 3;  // a small slip, as for commands
+        for (const auto& k : known) {
+            const std::size_t d = k.starts_with(name) && name.size() >= 3 ? 1 : edit_distance(name, k);
+            if (d < best_d) best_d = d, suggestion = "--" + k;
+        }
+        if (!suggestion.empty()) return "unknown option --" + name + "; did you mean " + suggestion + "?";
+    }
+    return {};
+}
+
 #if defined(__GLIBC__)
 // AddressSanitizer's own allocator would poison the block (16 MiB of shadow) and quarantine it (below):
 // GCC says so with __SANITIZE_ADDRESS__, clang (14) with __has_feature only.
@@ -229,7 +258,10 @@ int ballbar::app::cli_main(int argc, char** argv) {
         return root.exit(e);
     } catch (const CLI::ParseError& e) {
         // CLI11's own message, in the one error format, with where to look.
-        std::cerr << "ballbar: error: " << printable(e.what(), true) << "\nRun with --help for more information.\n";
+        std::cerr << "ballbar: error: " << printable(e.what(), true) << '\n';
+        if (const std::string hint = option_suggestion(root, argc, argv); !hint.empty())
+            std::cerr << "ballbar: " << printable(hint) << '\n';
+        std::cerr << "Run with --help for more information.\n";
         return kExitUsage;
     }
     try {

@@ -32,6 +32,8 @@
 #include "interrupt.hpp"
 #include "json_out.hpp"
 #include "operators.hpp"
+#include "prompt.hpp"
+#include "resume_line.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -55,7 +57,8 @@ class CircleOperator : public acq::Operator {
           out_(out),
           tty_(tty),
           path_(std::move(program_path)),
-          program_(std::move(program_text)) {}
+          program_(std::move(program_text)),
+          prompt_(in, out, reads_terminal(in), tty, InterruptGuard::request) {}
 
     bool confirm(std::string_view what, std::string_view prompt) override {
         end_line();
@@ -77,19 +80,22 @@ class CircleOperator : public acq::Operator {
             out_ << prompt << " [yes]" << std::endl;
             return true;
         }
-        out_ << prompt << " [yes/no] " << std::flush;
-        const auto a = read_choice(in_, out_, {"yes", "no"});
-        if (!a) out_ << "\n";
+        if (what == "setup" || what == "reference") return prompt_.ready(prompt);  // "no" is "not yet"
+        // The review: "measure again" runs the program again; abort stops, keeping the runs measured.
+        const auto a = what == "review" ? prompt_.choose(prompt, {"accept", "measure-again"})
+                                        : prompt_.choose(prompt, {"yes", "no"});
         return a && *a == 0;
     }
     std::size_t choose(const acq::Choice& c) override {
         end_line();
         if (mode_ == Mode::Terminal || mode_ == Mode::Json) {
-            if (mode_ == Mode::Json)
+            std::optional<std::size_t> a;
+            if (mode_ == Mode::Json) {
                 emit({{"event", "question"}, {"what", c.what}, {"prompt", c.prompt}, {"options", c.options}});
-            else
-                out_ << c.prompt << "\n? " << std::flush;
-            const auto a = read_choice(in_, out_, c.options);
+                a = read_choice(in_, out_, c.options);
+            } else {
+                a = prompt_.choose(c.prompt, c.options);
+            }
             return a ? *a : c.options.size() - 1;
         }
         if (mode_ == Mode::Scripted) out_ << c.prompt << " [" << c.options[c.default_option] << "]\n";
@@ -118,8 +124,14 @@ class CircleOperator : public acq::Operator {
             return;
         }
         if (!tty_ || mode_ == Mode::Quiet) return;
+        const double dev_um = (p.live_mm - p.expected_mm) * 1e3;
         out_ << "\r  runs " << p.done << "/" << p.total << "  bar " << std::fixed << std::setprecision(4) << p.live_mm
-             << " mm" << (p.out_of_range ? " (out of range)" : "") << "   " << std::flush;
+             << " mm";
+        if (p.out_of_range)
+            out_ << " (out of range)";
+        else
+            out_ << " (" << (dev_um >= 0 ? "+" : "") << std::setprecision(1) << dev_um << " µm from the radius)";
+        out_ << "\033[K" << std::flush;
         line_ = true;
     }
     void set_program_path(std::string path) { path_ = std::move(path); }
@@ -152,6 +164,7 @@ class CircleOperator : public acq::Operator {
     std::ostream& out_;
     bool tty_;
     std::string path_, program_;
+    Prompter prompt_;
     bool line_ = false;
     std::size_t last_done_ = static_cast<std::size_t>(-1);
 };
@@ -205,8 +218,10 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
             prepared = workflow::resume_circular_session(store, o.resume, *dialect, dwell_s);
             const storage::SessionInfo& before = *prepared.before;
             // With --json, standard output is the events alone (docs/cli.md): the words go to standard error.
-            (o.json ? std::cerr : std::cout) << "Session " << before.id << " is " << storage::to_string(before.state)
-                                             << (before.reason.empty() ? "" : ": " + before.reason) << std::endl;
+            (o.json ? std::cerr : std::cout)
+                << "Session " << before.id << " is " << storage::to_string(before.state)
+                << (before.reason.empty() ? "" : ": " + state_reason(storage::to_string(before.state), before.reason))
+                << std::endl;
         } else {
             prepared.test = test_from_options(o);
             opened.emplace(resolve_db_path(globals));
@@ -252,10 +267,9 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
         op.set_program(acq::circular_program(fitted, prepared.dialect, prepared.dwell_s));
     };
     const workflow::CircularMeasureResult run = workflow::measure_circular(store, prepared, op, mo);
-    workflow::throw_unless_completed(run.summary, run.session_id,
-                                     "ballbar circle measure --resume " +
-                                         (run.session_id ? std::to_string(*run.session_id) : "") + " --device " +
-                                         o.device);
+    workflow::throw_unless_completed(
+        run.summary, run.session_id,
+        resume_command("circular", run.session_id.value_or(0), globals.db_path, o.device, o.program_file));
     const std::int64_t id = *run.session_id;
     const workflow::StoredCircularResult& stored = *run.stored;
     if (o.json) {

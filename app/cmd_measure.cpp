@@ -5,6 +5,7 @@
 // session after its last completed point. docs/procedure.md describes the procedure and the files.
 #include <unistd.h>
 
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -19,9 +20,11 @@
 #include "ballbar/device/uri.hpp"
 #include "ballbar/workflow/measure.hpp"
 #include "command.hpp"
+#include "figures.hpp"
 #include "files.hpp"
 #include "interrupt.hpp"
 #include "operators.hpp"
+#include "resume_line.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -106,7 +109,7 @@ int dry_run(const MeasureOptions& o, const Globals& globals) {
             return kExitOk;
         }
         write_output(o.program_file, "--program", text, measure_inputs(o, globals.db_path));
-        std::cout << "Plan checked: " << plan.test_count() << " tests, " << plan.points.size()
+        std::cout << "Plan checked: " << count_of(plan.test_count(), "test") << ", " << plan.points.size()
                   << " points within the travel; NC program written to " << o.program_file << "\n";
         return kExitOk;
     } catch (const acq::PlanError& e) {
@@ -180,8 +183,10 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         try {
             const storage::SessionInfo before = opened->session(opened->find_session(o.resume));
             // With --json, standard output is the events alone (docs/cli.md): the words go to standard error.
-            (o.json ? std::cerr : std::cout) << "Session " << before.id << " is " << storage::to_string(before.state)
-                                             << (before.reason.empty() ? "" : ": " + before.reason) << "\n";
+            (o.json ? std::cerr : std::cout)
+                << "Session " << before.id << " is " << storage::to_string(before.state)
+                << (before.reason.empty() ? "" : ": " + state_reason(storage::to_string(before.state), before.reason))
+                << "\n";
         } catch (const storage::StorageError& e) {
             throw as_error(e);  // no such session: exit 2, as `sessions show` says it
         }
@@ -198,8 +203,9 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     (o.json ? std::cerr : std::cout) << "Session " << id
                                      << (done.empty() ? ""
                                                       : " (resumed after " + std::to_string(done.size()) + " points)")
-                                     << ": " << ba::to_string(plan.machine.geometry.type) << ", " << plan.test_count()
-                                     << " tests, " << plan.points.size() << " points.\n";
+                                     << ": " << ba::to_string(plan.machine.geometry.type) << ", "
+                                     << count_of(plan.test_count(), "test") << ", "
+                                     << count_of(plan.points.size(), "point") << ".\n";
     const std::string program =
         o.program_file.empty() ? "ballbar-session-" + std::to_string(id) + ".nc" : o.program_file;
 
@@ -221,7 +227,10 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         if (!sum.missing.empty()) {
             // The program for exactly the missing points, for the operator to look at (resume writes it
             // again, with the program stop before its rapid).
-            const std::string path = "ballbar-session-" + std::to_string(id) + "-retry.nc";
+            // Beside the program (the directory the operator chose with --program, if any).
+            const std::filesystem::path given(program);
+            const std::string path =
+                (given.parent_path() / (given.stem().string() + "-retry" + given.extension().string())).string();
             try {
                 write_program_file(path, acq::make_measuring_program(plan, sum.missing).nc);
                 retry = "; the " + std::to_string(sum.missing.size()) + " missing points' program is " + path;
@@ -231,7 +240,7 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         throw Error(ErrorCategory::interrupted,
                     "session " + std::to_string(id) + " interrupted after " + std::to_string(sum.samples) +
                         " samples (" + sum.reason + "); everything measured is stored" + retry +
-                        ". Continue it with: ballbar measure --resume " + std::to_string(id) + " --device " + o.device);
+                        ". Continue it with: " + resume_command("ssm", id, globals.db_path, o.device, o.program_file));
     }
     if (sum.final_state == acq::State::Done) {
         if (o.json) {

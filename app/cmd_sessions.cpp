@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "ballbar/storage/imports.hpp"
@@ -15,12 +16,18 @@
 #include "command.hpp"
 #include "figures.hpp"
 #include "files.hpp"
+#include "resume_line.hpp"
 
 namespace ballbar::app {
 namespace {
 
 struct SessionsOptions {
     bool json = false;
+    // The list's filters.
+    std::string filter_machine;    ///< --machine: the machine as the list names it ("TTTRR mill-1")
+    std::string filter_procedure;  ///< --procedure ssm|circular
+    std::string filter_state;      ///< --state completed|interrupted|failed|…
+    std::string since;             ///< --since YYYY-MM-DD (the session's start, UTC)
     std::string session;
     bool show_json = false;
     std::string machine;  ///< sessions trend MACHINE
@@ -35,34 +42,87 @@ storage::Store open_reader(const Globals& globals) {
 
 using workflow::machine_label;  // "TTTRR mill-1": the list's, the trend's and the web page's
 
+/// Columns a text takes on a terminal: its UTF-8 code points ("µ" and "Δ" are one each).
+std::size_t text_width(const std::string& text) {
+    return static_cast<std::size_t>(
+        std::count_if(text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
+/// The sessions the list's filters keep.
+bool kept(const SessionsOptions& o, const storage::SessionInfo& s) {
+    if (!o.filter_machine.empty() && machine_label(s.machine) != o.filter_machine) return false;
+    if (!o.filter_procedure.empty() &&
+        (o.filter_procedure == "circular") != (s.procedure == "circular"))  // ssm: every other procedure
+        return false;
+    if (!o.filter_state.empty() && storage::to_string(s.state) != o.filter_state) return false;
+    if (!o.since.empty() && s.started_at < o.since) return false;  // ISO 8601: the text orders as the time
+    return true;
+}
+
+void print_sessions_table(storage::Store& store, const std::vector<storage::SessionInfo>& sessions, std::ostream& out) {
+    char line[512];
+    std::snprintf(line, sizeof line, "%5s  %-8s  %-11s  %-24s  %-20s  %-18s  %6s  ", "id", "uuid", "state", "machine",
+                  "started", "result", "points");
+    out << line << "operator\n";
+    for (const auto& s : sessions) {
+        std::string result;
+        try {
+            result = workflow::headline(workflow::session_figures(store, s));
+        } catch (const std::exception&) {
+            result = "(unreadable)";  // a damaged result: its `sessions show` says why
+        }
+        // The start to the second (the stored text keeps its milliseconds and zone).
+        const std::string started = s.started_at.substr(0, 19);
+        std::snprintf(line, sizeof line, "%5lld  %-8s  %-11s  %-24s  %-20s  ", static_cast<long long>(s.id),
+                      s.uuid.substr(0, 8).c_str(), std::string(storage::to_string(s.state)).c_str(),
+                      machine_label(s.machine).c_str(), started.c_str());
+        out << line << result << std::string(text_width(result) < 18 ? 18 - text_width(result) : 0, ' ');
+        std::snprintf(line, sizeof line, "  %6lld  ", static_cast<long long>(s.point_count));
+        out << line << s.operator_name << '\n';
+    }
+}
+
 int list_sessions(const SessionsOptions& o, const Globals& globals, std::ostream& out) {
     const std::string path = resolve_db_path(globals);
     if (!std::filesystem::exists(path)) {  // listing does not create a database
         out << (o.json ? "[]" : "no sessions (no database at " + path + ")") << '\n';
         return kExitOk;
     }
+    if (!o.since.empty() && (o.since.size() != 10 || o.since[4] != '-' || o.since[7] != '-'))
+        throw Error(ErrorCategory::bad_input, "--since " + o.since + ": give a date as YYYY-MM-DD");
     auto store = open_reader(globals);
     note_database_damage(store.damage());
+    std::vector<storage::SessionInfo> sessions;
+    for (auto& s : store.sessions())
+        if (kept(o, s)) sessions.push_back(std::move(s));
+    const bool filtered = !(o.filter_machine + o.filter_procedure + o.filter_state + o.since).empty();
+    if (o.json && !filtered) {
+        out << storage::sessions_json(store) << '\n';  // what GET /api/sessions answers
+        return kExitOk;
+    }
     if (o.json) {
-        out << storage::sessions_json(store) << '\n';
+        // The same objects as without filters, the kept ones only.
+        auto all = nlohmann::json::parse(storage::sessions_json(store));
+        nlohmann::json shown = nlohmann::json::array();
+        for (auto& j : all)
+            if (std::any_of(sessions.begin(), sessions.end(),
+                            [&j](const storage::SessionInfo& s) { return j.value("id", std::int64_t{-1}) == s.id; }))
+                shown.push_back(std::move(j));
+        out << shown.dump(2) << '\n';
         return kExitOk;
     }
-    const auto sessions = store.sessions();
     if (sessions.empty()) {
-        out << "no sessions in " << store.path() << '\n';
+        out << "no sessions" << (filtered ? " match the filters" : "") << " in " << store.path() << '\n';
         return kExitOk;
     }
-    char line[512];
-    std::snprintf(line, sizeof line, "%5s  %-8s  %-11s  %-8s  %-24s  %-24s  %6s  %9s  ", "id", "uuid", "state",
-                  "source", "machine", "started", "points", "samples");
-    out << line << "operator\n";
-    for (const auto& s : sessions) {
-        std::snprintf(
-            line, sizeof line, "%5lld  %-8s  %-11s  %-8s  %-24s  %-24s  %6lld  %9lld  ", static_cast<long long>(s.id),
-            s.uuid.substr(0, 8).c_str(), std::string(storage::to_string(s.state)).c_str(),
-            std::string(storage::to_string(s.source)).c_str(), machine_label(s.machine).c_str(), s.started_at.c_str(),
-            static_cast<long long>(s.point_count), static_cast<long long>(s.sample_count));
-        out << line << s.operator_name << '\n';
+    // The emulator's demo sessions apart from the machines' own.
+    std::vector<storage::SessionInfo> real, demo;
+    for (auto& s : sessions) (s.source == storage::SessionSource::emulator ? demo : real).push_back(std::move(s));
+    if (!real.empty()) print_sessions_table(store, real, out);
+    if (!demo.empty()) {
+        if (!real.empty()) out << '\n';
+        out << "Demo sessions (the emulator):\n";
+        print_sessions_table(store, demo, out);
     }
     return kExitOk;
 }
@@ -127,11 +187,14 @@ int show_session(const SessionsOptions& o, const Globals& globals, std::ostream&
     }
     const auto s = store.session(id);
     out << "session " << s.id << "  " << s.uuid << '\n' << "  state       " << storage::to_string(s.state);
-    if (s.state != storage::SessionState::completed && !s.reason.empty()) out << "  (" << s.reason << ")";
+    if (s.state != storage::SessionState::completed && !s.reason.empty())
+        out << "  (" << state_reason(storage::to_string(s.state), s.reason) << ")";
     out << '\n';
     if (s.resumable())
-        out << "  resume      ballbar measure --resume " << s.id << " --device URI  (continues after its "
-            << s.point_count << " points)\n";
+        out << "  resume      " << resume_command(s.procedure, s.id, globals.db_path, "", "")
+            << (s.procedure == "circular" ? "  (runs the program again for the runs it lacks)"
+                                          : "  (continues after its " + std::to_string(s.point_count) + " points)")
+            << '\n';
     out << "  source      " << storage::to_string(s.source) << '\n'
         << "  procedure   " << s.procedure << '\n'
         << "  operator    " << s.operator_name << '\n'
@@ -263,6 +326,12 @@ BALLBAR_COMMAND(sessions) {
     auto opts = std::make_shared<ballbar::app::SessionsOptions>();
     auto* sub = root.add_subcommand("sessions", "List stored sessions, or show one");
     sub->add_flag("--json", opts->json, "as JSON");
+    sub->add_option("--machine", opts->filter_machine, "only this machine, as the list names it (\"TTTRR mill-1\")");
+    sub->add_option("--procedure", opts->filter_procedure, "only ssm or circular sessions")
+        ->check(CLI::IsMember({"ssm", "circular"}));
+    sub->add_option("--state", opts->filter_state, "only sessions in this state")
+        ->check(CLI::IsMember({"created", "running", "completed", "interrupted", "failed", "aborted"}));
+    sub->add_option("--since", opts->since, "only sessions started on or after this date (YYYY-MM-DD)");
     auto* show = sub->add_subcommand("show", "Show one session: metadata, audit trail, results");
     show->add_option("SESSION", opts->session, "session id or uuid prefix")->required();
     show->add_flag("--json", opts->show_json, "the whole session as JSON (as `export --format json`)");

@@ -26,6 +26,10 @@ ScreenUnit screen_unit(ba::ParamUnit unit) {
     return {1, "?"};
 }
 
+std::string count_of(std::size_t n, std::string_view noun) {
+    return std::to_string(n) + " " + std::string(noun) + (n == 1 ? "" : "s");
+}
+
 std::string with_uncertainty(double value, double std, std::string_view unit) {
     char buf[96];
     if (!(std > 0) || !std::isfinite(std) || !std::isfinite(value)) {

@@ -28,6 +28,9 @@ ScreenUnit screen_unit(analysis::ParamUnit unit);
 /// without an uncertainty (`std` ≤ 0 or not finite), four significant digits and no "±".
 std::string with_uncertainty(double value, double std, std::string_view unit);
 
+/// "1 test", "6 tests": a count and its noun, plural with an s unless it is one.
+std::string count_of(std::size_t n, std::string_view noun);
+
 /// How many σ `value` lies from `truth` when that is more than kFlagSigma, else nothing.
 inline constexpr double kFlagSigma = 5.0;
 std::optional<double> sigma_off(double value, double std, double truth);

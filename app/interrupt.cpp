@@ -35,6 +35,10 @@ InterruptGuard::~InterruptGuard() {
     ::sigaction(SIGTERM, &g_old_term, nullptr);
 }
 
+void InterruptGuard::request() {
+    g_interrupted.store(true);
+}
+
 const std::atomic<bool>* InterruptGuard::flag() {
     return &g_interrupted;
 }

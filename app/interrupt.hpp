@@ -20,6 +20,8 @@ class InterruptGuard {
     /// Set by the first SIGINT/SIGTERM.
     static const std::atomic<bool>* flag();
     static bool requested() { return flag()->load(); }
+    /// Raises the flag as a signal would: the operator's confirmed "abort" at a prompt.
+    static void request();
 };
 
 }  // namespace ballbar::app

@@ -1,15 +1,19 @@
 // SPDX-License-Identifier: MIT
 #include "operators.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "ballbar/fileio/output.hpp"
+#include "interrupt.hpp"
 
 namespace ballbar::app {
 
@@ -87,6 +91,10 @@ const std::vector<std::string> kFailureOptions = {"retry", "accept", "abort"};
 
 }  // namespace
 
+bool reads_terminal(const std::istream& in) {
+    return &in == &std::cin && ::isatty(STDIN_FILENO) == 1;
+}
+
 std::optional<std::size_t> read_choice(std::istream& in, std::ostream& out, const std::vector<std::string>& options) {
     const auto keys = letters(options);
     std::string line;
@@ -111,31 +119,29 @@ void write_program_file(const std::string& path, const analysis::NcProgram& prog
 
 TerminalOperator::TerminalOperator(std::istream& in, std::ostream& out, bool tty, const acq::Plan& plan,
                                    std::string program_path)
-    : in_(in), out_(out), tty_(tty), plan_(plan), program_path_(std::move(program_path)) {}
+    : in_(in),
+      prompt_(in, out, reads_terminal(in), tty, InterruptGuard::request),
+      out_(out),
+      tty_(tty),
+      plan_(plan),
+      program_path_(std::move(program_path)) {}
 
 void TerminalOperator::end_progress_line() {
     if (progress_line_) out_ << (tty_ ? "\r\033[K" : "\n");
     progress_line_ = false;
 }
 
-bool TerminalOperator::confirm(std::string_view, std::string_view prompt) {
+bool TerminalOperator::confirm(std::string_view what, std::string_view prompt) {
     end_progress_line();
-    out_ << (tty_ ? "\033[1m" : "") << prompt << (tty_ ? "\033[0m" : "") << " [yes/no] " << std::flush;
-    const auto a = read_choice(in_, out_, {"yes", "no"});
-    if (!a) out_ << "\n";
+    if (what == "setup" || what == "reference") return prompt_.ready(prompt);  // "no" is "not yet"
+    const auto a = prompt_.choose(prompt, {"yes", "no"});
     return a && *a == 0;
 }
 
 std::size_t TerminalOperator::choose(const acq::Choice& c) {
     end_progress_line();
-    out_ << (tty_ ? "\033[1m" : "") << c.prompt << (tty_ ? "\033[0m" : "") << "\n"
-         << options_text(c.options) << "? " << std::flush;
-    const auto a = read_choice(in_, out_, c.options);
-    if (!a) {
-        out_ << "\n";
-        return safe_option(c);
-    }
-    return *a;
+    const auto a = prompt_.choose(c.prompt, c.options);
+    return a ? *a : safe_option(c);
 }
 
 void TerminalOperator::message(std::string_view text) {
@@ -145,19 +151,16 @@ void TerminalOperator::message(std::string_view text) {
 
 acq::PointFailureAction TerminalOperator::point_failed(const acq::CapturedPoint& p, std::string_view why) {
     end_progress_line();
-    out_ << (tty_ ? "\033[31m" : "") << "Point " << where(p.planned) << " failed on every attempt: " << why
-         << (tty_ ? "\033[0m" : "") << "\n"
-         << options_text(kFailureOptions) << "? " << std::flush;
-    const auto a = read_choice(in_, out_, kFailureOptions);
+    const auto a =
+        prompt_.choose("Point " + where(p.planned) + " failed on every attempt: " + std::string(why), kFailureOptions);
     return a ? failure_action(*a) : acq::PointFailureAction::Abort;
 }
 
 void TerminalOperator::wait_at_point(const acq::PlannedPoint& p) {
     end_progress_line();
-    out_ << "Move to " << where(p) << " (X " << p.pose.X_mm << " Y " << p.pose.Y_mm << " Z " << p.pose.Z_mm
-         << ") and press Enter when the machine stands. " << std::flush;
-    std::string line;
-    std::getline(in_, line);
+    std::ostringstream os;
+    os << "Move to " << where(p) << " (X " << p.pose.X_mm << " Y " << p.pose.Y_mm << " Z " << p.pose.Z_mm << ").";
+    prompt_.enter(os.str(), "when the machine stands there");
 }
 
 void TerminalOperator::progress(const acq::Progress& p) {
@@ -171,7 +174,9 @@ void TerminalOperator::progress(const acq::Progress& p) {
        << "test " << p.test + 1 << " step " << p.step << " point " << p.point + 1 << "  bar ";
     os.setf(std::ios::fixed);
     if (p.out_of_range) {
-        os << "\033[33mout of range (beyond ±1 mm)\033[0m";
+        os << "\033[33mout of range";
+        if (p.range_mm > 0) os << " (beyond ±" << std::setprecision(0) << p.range_mm * 1e3 << " µm)";
+        os << "\033[0m";
     } else {
         const double dev_um = (p.live_mm - p.expected_mm) * 1e3;
         os.precision(4);
@@ -210,10 +215,7 @@ void TerminalOperator::run_program(const analysis::NcProgram& program, std::span
 
 void TerminalOperator::program_stop(const acq::ProgramStop& stop) {
     end_progress_line();
-    out_ << (tty_ ? "\033[1m" : "") << "Program stop (M0): " << stop.what << "." << (tty_ ? "\033[0m" : "")
-         << "\nPress Enter when you have pressed cycle start. " << std::flush;
-    std::string line;
-    std::getline(in_, line);
+    prompt_.enter("Program stop (M0): " + stop.what + ".", "when you have pressed cycle start");
 }
 
 // ---- ScriptedTerminalOperator ----------------------------------------------------------------------

@@ -8,12 +8,17 @@
 #include <string>
 
 #include "ballbar/acquisition/interfaces.hpp"
+#include "prompt.hpp"
 
 namespace ballbar::app {
 
 /// Reads one answer among `options` from `in`: the full word or its first letter (case-insensitive);
 /// anything else is asked again. Returns nullopt at the end of the input.
 std::optional<std::size_t> read_choice(std::istream& in, std::ostream& out, const std::vector<std::string>& options);
+
+/// True when `in` is this process's standard input and that is a terminal (its typed-ahead keys can be
+/// discarded before a question).
+bool reads_terminal(const std::istream& in);
 
 /// The operator at a terminal: prompts on `out`, answers from `in`; a progress line with the live bar
 /// reading and the program's time left; colour and line rewriting only when `tty`. `run_program`
@@ -35,6 +40,7 @@ class TerminalOperator : public acquisition::Operator {
   protected:
     void end_progress_line();
     std::istream& in_;
+    Prompter prompt_;
     std::ostream& out_;
     bool tty_;
     const acquisition::Plan& plan_;

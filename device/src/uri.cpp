@@ -16,7 +16,9 @@ namespace ballbar::device {
 namespace {
 
 constexpr const char* kDeviceUriForms =
-    "expected emulator:[CONFIG], serial:PATH, tcp:HOST:PORT, usb:VID:PID[:SERIAL] or hid:VID:PID[:SERIAL]";
+    "expected a ball-bar as emulator:[CONFIG], serial:PATH, tcp:HOST:PORT, usb:VID:PID[:SERIAL] or "
+    "hid:VID:PID[:SERIAL], or a digital gauge as sylvac:PATH, mitutoyo-itn:[SERIAL], digimatic:PATH or "
+    "modbus:PATH[?slave=N&baud=B]";
 
 [[noreturn]] void bad(std::string_view uri, const std::string& why) {
     throw std::invalid_argument("bad device URI '" + std::string(uri) + "': " + why + " (" + kDeviceUriForms + ")");

@@ -40,6 +40,21 @@ TEST(CliErrors, AnUnknownOptionIsABadCommandLineInTheOneFormat) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("test.db")));
 }
 
+TEST(CliErrors, AMistypedOptionSuggestsTheClosestOfItsCommand) {
+    TempDir dir;
+    CliRun r = run(dir, "measure --devce serial:/dev/null --machine m.json");
+    EXPECT_EQ(r.code, 2);
+    expect_one_error(r, "--devce");
+    EXPECT_NE(r.err.find("unknown option --devce; did you mean --device?"), std::string::npos) << r.err;
+    r = run(dir, "circle measure --radus=50");  // a subcommand's option, written with =
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("did you mean --radius?"), std::string::npos) << r.err;
+    r = run(dir, "demo --frobnicate");  // nothing close: no guess
+    EXPECT_EQ(r.code, 2);
+    EXPECT_EQ(r.err.find("did you mean"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("test.db")));
+}
+
 TEST(CliErrors, IdentifyNamesAMissingFileAndCreatesNoDatabase) {
     TempDir dir;
     CliRun r = run(dir, "identify nonexist.readings");

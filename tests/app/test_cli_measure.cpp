@@ -122,10 +122,10 @@ TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
             const char* text;
             std::string answer;
         };
-        const Prompt prompts[] = {{"[yes/no]", "yes\n"},
-                                  {"pressed cycle start.", "\n"},
-                                  {"]easure-again or", "acept\n"},
-                                  {"Please answer", "a\n"}};
+        const Prompt prompts[] = {{"[yes / not yet / abort]", "yes\n"},
+                                  {"pressed cycle start (or type abort).", "\n"},
+                                  {"measure-again or abort:", "acept\n"},
+                                  {"Please answer", "ac\n"}};
         std::vector<std::pair<std::size_t, std::string>> due;
         for (const Prompt& p : prompts)
             for (std::size_t at = screen.find(p.text); at != std::string::npos; at = screen.find(p.text, at + 1))
@@ -150,7 +150,8 @@ TEST(CliMeasure, InteractiveSessionThroughAPseudoTerminal) {
     EXPECT_NE(screen.find("calibrator"), std::string::npos) << screen;
     EXPECT_NE(screen.find("start it on the machine"), std::string::npos) << screen;
     EXPECT_NE(screen.find("Program stop (M0): mount the bar"), std::string::npos) << screen;
-    EXPECT_NE(screen.find("Please answer [a]ccept"), std::string::npos) << "a typo is asked again: " << screen;
+    EXPECT_NE(screen.find("Please answer accept, measure-again or abort"), std::string::npos)
+        << "a typo is asked again: " << screen;
     EXPECT_NE(screen.find("ΔV1 ("), std::string::npos) << "results shown before they are accepted: " << screen;
     EXPECT_NE(screen.find(", σ "), std::string::npos) << "each point with its standard deviation: " << screen;
     EXPECT_NE(screen.find(" left"), std::string::npos) << "time left: " << screen;
@@ -425,7 +426,7 @@ TEST(CliMeasure, CtrlCStoresStopsWithExit3AndResumes) {
     std::string shown;
     ASSERT_EQ(run_measure("--db " + db.string() + " sessions show " + s.session + " --json", &shown), 0) << shown;
     EXPECT_NE(shown.find("\"state\": \"interrupted\""), std::string::npos) << shown;
-    EXPECT_NE(shown.find("interrupted: interrupted by the operator"), std::string::npos) << shown;
+    EXPECT_NE(shown.find("interrupted: interrupted by the operator"), std::string::npos) << shown;  // the stored reason
     expect_resumes_after_three_points(dir, db, s.session);
 }
 

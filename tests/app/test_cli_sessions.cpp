@@ -111,18 +111,21 @@ TEST(CliSessions, KilledIsInterruptedAFailedOpenKeepsItSoAndItResumes) {
     //    stays interrupted and resumable (a failed open never makes it failed: issue 24).
     CliRun r = run(dir, "measure --non-interactive --resume 1 --device " + mute + " --program " + dir.file("r.nc"));
     EXPECT_EQ(r.code, 3) << r.out << r.err;
-    EXPECT_NE(r.out.find("Session 1 is interrupted: interrupted"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("Session 1 is interrupted: "), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("interrupted: interrupted"), std::string::npos) << "said once: " << r.out;
     const CliRun shown = run(dir, "sessions show 1");
-    EXPECT_NE(shown.out.find("state       interrupted  (interrupted: cannot open the instrument"), std::string::npos)
+    EXPECT_NE(shown.out.find("state       interrupted  (cannot open the instrument"), std::string::npos) << shown.out;
+    // The line to copy names the database the command was given.
+    EXPECT_NE(shown.out.find("resume      ballbar --db " + dir.file("test.db") + " measure --resume 1 --device URI"),
+              std::string::npos)
         << shown.out;
-    EXPECT_NE(shown.out.find("resume      ballbar measure --resume 1"), std::string::npos) << shown.out;
 
     // 3. it resumes on a working instrument and completes; the reason comes first.
     const fs::path cfg = emulator_config_sessions(dir, 100);
     r = run(dir, "measure --non-interactive --resume 1 --device emulator:" + cfg.string() + " --program " +
                      dir.file("r2.nc"));
     EXPECT_EQ(r.code, 0) << r.out << r.err;
-    EXPECT_EQ(r.out.rfind("Session 1 is interrupted: interrupted: cannot open the instrument", 0), 0u) << r.out;
+    EXPECT_EQ(r.out.rfind("Session 1 is interrupted: cannot open the instrument", 0), 0u) << r.out;
     EXPECT_NE(r.out.find("completed"), std::string::npos) << r.out;
     j = show_json(dir, "1");
     EXPECT_EQ(j["session"]["state"], "completed");
@@ -155,4 +158,36 @@ TEST(CliSessions, BarLengthMismatchStopsBeforeAnyQuestionAndNamesTheFix) {
     EXPECT_EQ(all.find("[plan:"), std::string::npos) << "nothing was asked of the operator:\n" << all;
     const auto j = show_json(dir, "1");
     EXPECT_EQ(j["session"]["instrument"]["calibrated_length_mm"], 150.0) << "the identity is stored all the same";
+}
+
+TEST(CliSessions, TheListFiltersByMachineProcedureStateAndDateAndKeepsDemosApartWithTheirResult) {
+    TempDir dir;
+    ASSERT_EQ(run(dir, "demo --test circular --plane XY").code, 0);
+    ASSERT_EQ(run(dir, "demo --json").code, 0);
+    const CliRun all = run(dir, "sessions");
+    ASSERT_EQ(all.code, 0) << all.err;
+    EXPECT_NE(all.out.find("Demo sessions (the emulator):"), std::string::npos) << all.out;
+    EXPECT_NE(all.out.find("G "), std::string::npos) << "the circular test's G: " << all.out;
+    EXPECT_NE(all.out.find("|ΔV| max "), std::string::npos) << "the SSM's largest |ΔV|: " << all.out;
+    EXPECT_NE(all.out.find(" µm"), std::string::npos) << all.out;
+
+    const auto count = [&dir](const std::string& filters) {
+        const CliRun r = run(dir, "sessions --json " + filters);
+        EXPECT_EQ(r.code, 0) << r.err;
+        return nlohmann::json::parse(r.out).size();
+    };
+    EXPECT_EQ(count(""), 2u);
+    EXPECT_EQ(count("--procedure circular"), 1u);
+    EXPECT_EQ(count("--procedure ssm"), 1u);
+    EXPECT_EQ(count("--state completed"), 2u);
+    EXPECT_EQ(count("--state interrupted"), 0u);
+    EXPECT_EQ(count("--since 2000-01-01"), 2u);
+    EXPECT_EQ(count("--since 2999-01-01"), 0u);
+    const auto listed = nlohmann::json::parse(run(dir, "sessions --json").out);
+    const std::string machine = listed[0]["machine"]["type"].get<std::string>() + " " +
+                                listed[0]["machine"]["name"].get<std::string>();
+    EXPECT_EQ(count("--machine '" + machine + "'"), 1u) << machine;
+    EXPECT_NE(run(dir, "sessions --since 2999-01-01").out.find("no sessions match the filters"), std::string::npos);
+    EXPECT_EQ(run(dir, "sessions --since yesterday").code, 2);
+    EXPECT_EQ(run(dir, "sessions --procedure milling").code, 2);
 }

@@ -306,7 +306,10 @@ TEST(CircleMeasure, CtrlCDuringTheProgramStopsWithExit3AndTheSessionResumes) {
     std::smatch sm;
     ASSERT_TRUE(std::regex_search(out, sm, std::regex("Session ([0-9]+)"))) << out;
     const std::string id = sm[1].str();
-    EXPECT_NE(out.find("--resume " + id), std::string::npos) << out;
+    EXPECT_NE(out.find("circle measure --resume " + id), std::string::npos) << out;
+    EXPECT_NE(out.find("--program " + dir.file("circle.nc")), std::string::npos) << out;
+    const auto shown = run(dir, "sessions show " + id);
+    EXPECT_NE(shown.out.find("circle measure --resume " + id + " --device URI"), std::string::npos) << shown.out;
     const auto r = run(dir, "circle measure --resume " + id + " --device serial:" + emu.pty + " --program '" +
                                 dir.file("circle.nc") + "' --non-interactive");
     stop_emulator(emu);

@@ -223,7 +223,9 @@ void throw_unless_completed(const acq::CircularSummary& sum, std::optional<std::
     if (sum.interrupted)
         throw Error(ErrorCategory::interrupted,
                     session + " interrupted after " + std::to_string(sum.samples) + " samples (" + sum.reason +
-                        "); everything measured is stored. Continue it with: " + resume_hint);
+                        "); everything measured is stored" +
+                        (resume_hint.empty() ? std::string(" (a demo session is not resumed: run the demo again)")
+                                             : ". Continue it with: " + resume_hint));
     if (sum.refused) throw Error(ErrorCategory::bad_input, session + ": " + sum.reason);
     if (sum.final_state == acq::State::Aborted)
         throw Error(ErrorCategory::interrupted, session + " aborted: " + sum.reason);

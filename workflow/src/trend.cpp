@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "ballbar/acquisition/result_codec.hpp"
@@ -39,44 +40,62 @@ struct AngleMeans {
 
 }  // namespace
 
+TrendPoint session_figures(storage::Store& store, const storage::SessionInfo& s) {
+    TrendPoint p;
+    p.session = s.id;
+    p.started_at = s.started_at;
+    p.procedure = s.procedure;
+    p.demo = s.source == storage::SessionSource::emulator;
+    double dv_max = -1;
+    AngleMeans angles;
+    for (const auto& r : store.results(s.id)) {
+        try {
+            if (r.kind == "circular") {
+                circular_figures(storage::circular_result_from_json(r.payload_json), p);
+            } else if (r.kind == acq::kSsmResultKind) {
+                dv_max = std::max(dv_max, 1e3 * acq::location_from_json(r.payload_json).dV_mm.norm());
+            } else if (r.kind == acq::kOrientationResultKind) {
+                const acq::TestResult t = acq::test_from_json(r.payload_json);
+                if (!t.orientation.exact) continue;
+                const auto m = acq::measured_angles(s.machine.type, t.kind);
+                const double v[3] = {t.orientation.exact->d_alpha_rad, t.orientation.exact->d_beta_rad,
+                                     t.orientation.exact->d_gamma_rad};
+                const bool on[3] = {m.alpha, m.beta, m.gamma};
+                for (int k = 0; k < 3; ++k)
+                    if (on[k]) {
+                        angles.sum[k] += analysis::rad_to_arcsec(v[k]);
+                        ++angles.n[k];
+                    }
+            }
+        } catch (const std::exception&) {
+            continue;  // an unreadable result: its session's page says why
+        }
+    }
+    if (dv_max >= 0) p.figures["dV_max_um"] = dv_max;
+    const char* names[3] = {"d_alpha_arcsec", "d_beta_arcsec", "d_gamma_arcsec"};
+    for (int k = 0; k < 3; ++k)
+        if (angles.n[k] > 0) p.figures[names[k]] = angles.sum[k] / angles.n[k];
+    return p;
+}
+
+std::string headline(const TrendPoint& p) {
+    char text[64];
+    if (const auto g = p.figures.find("G_um"); g != p.figures.end()) {
+        std::snprintf(text, sizeof text, "G %.1f µm", g->second);
+        return text;
+    }
+    if (const auto dv = p.figures.find("dV_max_um"); dv != p.figures.end()) {
+        std::snprintf(text, sizeof text, "|ΔV| max %.1f µm", dv->second);
+        return text;
+    }
+    return {};
+}
+
 std::vector<TrendPoint> machine_trend(storage::Store& store, const std::string& machine) {
     std::vector<TrendPoint> out;
     for (const auto& s : store.sessions()) {
         if (s.state != storage::SessionState::completed || machine_label(s.machine) != machine) continue;
-        TrendPoint p;
-        p.session = s.id;
-        p.started_at = s.started_at;
-        p.procedure = s.procedure;
-        p.demo = s.source == storage::SessionSource::emulator;
-        double dv_max = -1;
-        AngleMeans angles;
-        for (const auto& r : store.results(s.id)) {
-            try {
-                if (r.kind == "circular") {
-                    circular_figures(storage::circular_result_from_json(r.payload_json), p);
-                } else if (r.kind == acq::kSsmResultKind) {
-                    dv_max = std::max(dv_max, 1e3 * acq::location_from_json(r.payload_json).dV_mm.norm());
-                } else if (r.kind == acq::kOrientationResultKind) {
-                    const acq::TestResult t = acq::test_from_json(r.payload_json);
-                    if (!t.orientation.exact) continue;
-                    const auto m = acq::measured_angles(s.machine.type, t.kind);
-                    const double v[3] = {t.orientation.exact->d_alpha_rad, t.orientation.exact->d_beta_rad,
-                                         t.orientation.exact->d_gamma_rad};
-                    const bool on[3] = {m.alpha, m.beta, m.gamma};
-                    for (int k = 0; k < 3; ++k)
-                        if (on[k]) {
-                            angles.sum[k] += analysis::rad_to_arcsec(v[k]);
-                            ++angles.n[k];
-                        }
-                }
-            } catch (const std::exception&) {
-                continue;  // an unreadable result: its session's page says why
-            }
-        }
-        if (dv_max >= 0) p.figures["dV_max_um"] = dv_max;
-        const char* names[3] = {"d_alpha_arcsec", "d_beta_arcsec", "d_gamma_arcsec"};
-        for (int k = 0; k < 3; ++k)
-            if (angles.n[k] > 0) p.figures[names[k]] = angles.sum[k] / angles.n[k];
+        TrendPoint p = session_figures(store, s);
         if (!p.figures.empty()) out.push_back(std::move(p));
     }
     std::stable_sort(out.begin(), out.end(),

@@ -136,7 +136,8 @@ CircularMeasureResult measure_circular(storage::Store& store, const PreparedCirc
                                        acquisition::Operator& op, const CircularMeasureOptions& options);
 
 /// What a summary means as an error: nothing for a completed run; otherwise Error of the category it is
-/// (interrupted: resumable, with `resume_hint`; refused: bad input; aborted; failed), naming the session.
+/// (interrupted: resumable, with `resume_hint`, the command that continues it, empty for a demo; refused: bad input;
+/// aborted; failed), naming the session.
 void throw_unless_completed(const acquisition::CircularSummary& sum, std::optional<std::int64_t> id,
                             const std::string& resume_hint);
 

@@ -25,6 +25,13 @@ struct TrendPoint {
 /// How a session names its machine in a trend and in the page's filter: "TTTRR mill-1" (type, name).
 std::string machine_label(const analysis::MachineGeometry& machine);
 
+/// One session's headline figures from its stored results (none when it holds no result).
+TrendPoint session_figures(storage::Store& store, const storage::SessionInfo& session);
+
+/// The figure a list shows for a session: "G 12.3 µm" (a circular test, the largest of its runs),
+/// "|ΔV| max 45.2 µm" (the SSM); empty when it has neither.
+std::string headline(const TrendPoint& figures);
+
 /// The completed sessions of the machine labelled `machine` (machine_label) that hold a result, oldest
 /// first. A stored result that cannot be read is skipped (its session shows its error on its own page).
 std::vector<TrendPoint> machine_trend(storage::Store& store, const std::string& machine);
