@@ -165,6 +165,19 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
 
     const workflow::ModelChoice model =
         workflow::find_model(args.model, resolve_db_path(globals), globals.db_path.empty() ? "" : " (check --db)");
+    // The corrections assume what the model could not determine: said before anything is written (in
+    // the report's "warnings" with --json).
+    std::vector<std::string> warnings;
+    if (!model.model.unobservable.empty()) {
+        std::string held;
+        for (const auto p : model.model.unobservable)
+            held += (held.empty() ? "" : ", ") + std::string(ba::param_info(p).name);
+        warnings.push_back("the model holds " + held +
+                           " at 0 (its readings could not determine them): the parameters that carry their effect "
+                           "correct the tool-table relation at the poses it was measured at; `ballbar identify` "
+                           "names them");
+        if (!args.json) std::cerr << "ballbar: warning: " << warnings.back() << '\n';
+    }
     workflow::ProgramCompensation pc;
     pc.dialect = args.dialect;
     pc.controller = args.controller;
@@ -213,6 +226,7 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
                {"mode_switches", switches},
                {"retracts_uncompensated", s.retracts},
                {"method", args.exact ? "exact" : "first-order"},
+               {"warnings", warnings},
                {"directions", args.iso_directions ? "iso" : "ballbar"},
                {"max_linear_correction_mm", s.max_linear_mm},
                {"max_linear_correction_line", line_or_null(s.max_linear_line)},

@@ -45,23 +45,12 @@ struct MeasureOptions {
     std::size_t from_point = 0;
 };
 
-/// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm"
-std::string vec_um_pm(const ba::Vec3& v_mm, const ba::Vec3& std_mm) {
-    std::ostringstream os;
-    os.setf(std::ios::fixed);
-    os.precision(2);
-    os << "(" << v_mm.x() * 1e3 << ", " << v_mm.y() * 1e3 << ", " << v_mm.z() * 1e3 << ")";
-    if (std_mm.norm() > 0)
-        os << " ± (" << std_mm.x() * 1e3 << ", " << std_mm.y() * 1e3 << ", " << std_mm.z() * 1e3 << ")";
-    os << " µm";
-    return os.str();
-}
-
 void print_results(std::ostream& out, const acq::Plan& plan, const acq::SessionSummary& sum) {
     const ba::MachineType type = plan.machine.geometry.type;
     for (const auto& t : sum.tests) {
         out << "test " << t.test + 1 << " (" << acq::to_string(t.kind) << "):\n  ΔV1 "
-            << vec_um_pm(t.dV1_mm, t.dV1_std_mm) << "\n  ΔV2 " << vec_um_pm(t.dV2_mm, t.dV2_std_mm) << "\n";
+            << vec_um(t.dV1_mm, t.dV1_std_mm.norm() > 0 ? &t.dV1_std_mm : nullptr) << "\n  ΔV2 "
+            << vec_um(t.dV2_mm, t.dV2_std_mm.norm() > 0 ? &t.dV2_std_mm : nullptr) << "\n";
         if (!t.orientation.exact) {
             out << "  orientation: " << t.orientation.singular << "\n";
             continue;

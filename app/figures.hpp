@@ -28,6 +28,10 @@ ScreenUnit screen_unit(analysis::ParamUnit unit);
 /// without an uncertainty (`std` ≤ 0 or not finite), four significant digits and no "±".
 std::string with_uncertainty(double value, double std, std::string_view unit);
 
+/// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm" from mm, the decimals (2 to 4) set by two significant
+/// digits of the smallest uncertainty, so an uncertainty never reads 0.00; without `std`, two decimals.
+std::string vec_um(const analysis::Vec3& v_mm, const analysis::Vec3* std_mm);
+
 /// "1 test", "6 tests": a count and its noun, plural with an s unless it is one.
 std::string count_of(std::size_t n, std::string_view noun);
 
@@ -41,6 +45,10 @@ std::string sigma_flag(double value, double std, double truth, std::string_view 
 /// An identification's summary for the terminal: convergence, residuals in µm, and each estimate in its
 /// screen unit with its uncertainty and independence (replaces FitSummary::brief_report on screen).
 std::string fit_report(const analysis::FitSummary& fit);
+
+/// What the fit could not separate: the held (unobservable) parameters whose effect estimated ones
+/// carry, each carrier with its change per unit of each; empty when nothing is carried.
+std::string carried_note(const analysis::FitSummary& fit);
 
 /// One estimate of a fit as "Y0A  15.026 ± 0.016 µm" (unit from the parameter; socket offsets µm).
 std::string estimate_text(const analysis::ParamEstimate& e);

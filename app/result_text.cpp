@@ -25,35 +25,12 @@ namespace acq = ballbar::acquisition;
 namespace ba = ballbar::analysis;
 using nlohmann::json;
 
-/// "(-7.52, -20.71, 3.70) ± (0.05, 0.05, 0.04) µm" from mm: two significant digits of the smallest
-/// uncertainty fix the decimals (2 to 4).
-std::string vec_um(const ba::Vec3& v, const ba::Vec3* std) {
-    int decimals = 2;
-    if (std) {
-        double smallest = 0;
-        for (int a = 0; a < 3; ++a) {
-            const double s = (*std)[a] * 1e3;
-            if (s > 0 && (smallest == 0 || s < smallest)) smallest = s;
-        }
-        if (smallest > 0) decimals = std::clamp(1 - static_cast<int>(std::floor(std::log10(smallest))), 2, 4);
-    }
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "(%.*f, %.*f, %.*f)", decimals, v.x() * 1e3, decimals, v.y() * 1e3, decimals,
-                  v.z() * 1e3);
-    std::string out = buf;
-    if (std) {
-        std::snprintf(buf, sizeof buf, " ± (%.*f, %.*f, %.*f)", decimals, std->x() * 1e3, decimals, std->y() * 1e3,
-                      decimals, std->z() * 1e3);
-        out += buf;
-    }
-    return out + " µm";
-}
-
 std::vector<std::string> ssm_lines(std::string_view payload) {
     const acq::LocationResult r = acq::location_from_json(payload);
     char buf[96];
-    std::string line = "test " + std::to_string(r.test + 1) + " step " + std::to_string(r.step) + ": e " +
-                       vec_um(r.ssm.exact_mm, &r.ssm.std_mm) + ", ΔV " + vec_um(r.dV_mm, nullptr);
+    // ΔV as `measure` and `demo` print it, with its uncertainty (that of e, of which it is ±).
+    std::string line = "test " + std::to_string(r.test + 1) + " step " + std::to_string(r.step) + ": ΔV " +
+                       vec_um(r.dV_mm, &r.ssm.std_mm) + ", e " + vec_um(r.ssm.exact_mm, nullptr);
     std::snprintf(buf, sizeof buf, ", condition %.3g, %zu points", r.ssm.condition_number, r.ssm.n);
     return {line + buf};
 }

@@ -424,7 +424,7 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
     };
 
     // The noise floor (repeated points: from the base fit's residuals) and the search beyond the library.
-    out.noise_floor = estimate_noise_floor(readings, r, options.noise_mm);
+    out.noise_floor = estimate_noise_floor(readings, r, options.noise_mm, options.resolution_mm);
     const std::vector<EmpiricalFamily> families = empirical_families(readings);
     std::optional<TermBasis> basis;
     auto search_now = [&] {
@@ -451,6 +451,10 @@ DiscoveryResult discover(const ReadingSet& readings, const DiscoveryOptions& opt
             std::vector<Eigen::Index> mcols = all_model_columns();
             const Projection proj(ctx.gram, mcols);
             const double rss = r.squaredNorm();
+            // Below the instrument's resolution nothing is structure: no effect is added to explain it.
+            if (out.noise_floor.raised_to_resolution &&
+                std::sqrt(rss / static_cast<double>(n)) < out.noise_floor.sigma_mm)
+                break;
             StepScores sc = score_candidates(ctx, proj, r, open, out);
             if (sc.scores.empty() || sc.sigma2 <= 0) break;
             alpha = options.family_alpha / static_cast<double>(sc.scores.size());

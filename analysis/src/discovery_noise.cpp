@@ -62,8 +62,35 @@ double f_critical(double alpha, double d1, double d2) {
     return hi;
 }
 
+namespace {
+/// The floor the data give (the user's figure, the within-point spread, repeated points).
+NoiseFloor floor_from_data(const ReadingSet& readings, const Eigen::VectorXd& residual_mm,
+                           std::optional<double> user_mm);
+}  // namespace
+
 NoiseFloor estimate_noise_floor(const ReadingSet& readings, const Eigen::VectorXd& residual_mm,
-                                std::optional<double> user_mm) {
+                                std::optional<double> user_mm, std::optional<double> resolution_mm) {
+    NoiseFloor f = floor_from_data(readings, residual_mm, user_mm);
+    if (user_mm || !resolution_mm || !(*resolution_mm > 0)) return f;
+    // A reading averaged from many samples can look quieter than the instrument resolves; what is
+    // below its quantisation (resolution/√12) is not structure the readings can show.
+    const double quantum = *resolution_mm / std::sqrt(12.0);
+    if (f.sigma_mm < quantum) {
+        char text[200];
+        std::snprintf(text, sizeof text, "%s; raised to the instrument's resolution %.3g µm / √12", f.detail.c_str(),
+                      *resolution_mm * 1e3);
+        f.sigma_mm = quantum;
+        f.detail = text;
+        f.raised_to_resolution = true;
+        if (f.source == "unknown") f.source = "resolution";
+    }
+    return f;
+}
+
+namespace {
+
+NoiseFloor floor_from_data(const ReadingSet& readings, const Eigen::VectorXd& residual_mm,
+                           std::optional<double> user_mm) {
     NoiseFloor f;
     char text[160];
     if (user_mm) {
@@ -134,6 +161,8 @@ NoiseFloor estimate_noise_floor(const ReadingSet& readings, const Eigen::VectorX
     f.detail = "no n/std_mm in the readings, no repeated points, no figure given (--noise-um)";
     return f;
 }
+
+}  // namespace
 
 NoiseVerdict noise_verdict(const Eigen::VectorXd& residual_mm, double fitted_unknowns, const NoiseFloor& floor,
                            double alpha) {

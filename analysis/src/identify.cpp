@@ -348,6 +348,20 @@ FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
         js = std::move(jac);
         a = js.transpose() * js;
     };
+    // The held columns with an effect (unobservable: in the span of the fitted ones), unit-scaled: what
+    // the fit makes the fitted parameters carry of them is reported with the estimates.
+    std::vector<std::size_t> held;
+    for (std::size_t c = 0; c < out.estimates.size(); ++c)
+        if (std::find(cols.begin(), cols.end(), static_cast<int>(c)) == cols.end() &&
+            out.estimates[c].sensitivity > opt.min_sensitivity)
+            held.push_back(c);
+    Eigen::MatrixXd jh(jac_full.rows(), static_cast<Eigen::Index>(held.size()));
+    Eigen::VectorXd held_norm(static_cast<Eigen::Index>(held.size()));
+    for (std::size_t k = 0; k < held.size(); ++k) {
+        const auto col = jac_full.col(static_cast<Eigen::Index>(held[k]));
+        held_norm[static_cast<Eigen::Index>(k)] = col.norm();
+        jh.col(static_cast<Eigen::Index>(k)) = col / col.norm();
+    }
     set_jacobian(select(jac_full));
     jac_full = Eigen::MatrixXd();
     out.jacobian_evaluations = 1;
@@ -465,6 +479,18 @@ FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
             pe.independence = 1.0 / std::sqrt(ainv(j, j));
             for (Eigen::Index k = 0; k < m; ++k)
                 out.correlation(j, k) = ainv(j, k) / std::sqrt(ainv(j, j) * ainv(k, k));
+        }
+        if (!held.empty()) {
+            // A held unit direction h ≈ Σ js_j q_j: q = (jsᵀjs)⁻¹ jsᵀ h, dimensionless. The estimate of
+            // fitted j then moves by q_j · |J_h| / scale_j (its unit) per unit of the held parameter.
+            const Eigen::MatrixXd q = ainv * (js.transpose() * jh);
+            for (Eigen::Index j = 0; j < m; ++j) {
+                auto& pe = out.estimates[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
+                for (Eigen::Index k = 0; k < q.cols(); ++k)
+                    if (std::abs(q(j, k)) >= 0.1)
+                        pe.carries.push_back(
+                            {out.estimates[held[static_cast<std::size_t>(k)]].name, q(j, k) * held_norm[k] / scale[j]});
+            }
         }
     }
     for (auto& pe : out.estimates) {

@@ -81,6 +81,7 @@ DiscoverResult discover(ReadingInputs in, const DiscoverOptions& o, const StoreO
             throw Error(ErrorCategory::bad_input, "--noise-um: must be a positive number of micrometres");
         opt.noise_mm = *o.noise_um * 1e-3;
     }
+    opt.resolution_mm = in.resolution_mm;
     if (!o.model.empty()) {
         try {
             opt.base_model = ba::parse_model(o.model, out.readings.machine.type);

@@ -48,6 +48,9 @@ ReadingInputs read_inputs(std::span<const std::string> inputs, const StoreOpener
             throw Error(ErrorCategory::bad_input, "session " + std::to_string(id) + " has no readings");
         in.sessions.push_back(id);
         in.names.push_back("session " + std::to_string(id));
+        for (const auto& g : store.sample_segments(id))
+            if (g.resolution_mm && *g.resolution_mm > 0)
+                in.resolution_mm = std::max(in.resolution_mm.value_or(0.0), *g.resolution_mm);
     }
     return in;
 }

@@ -75,6 +75,7 @@ acq::SessionSummary measure_ssm(storage::Store& store, const PreparedSession& pr
     const acq::SessionSummary sum = session.run();
     sink.finish(sum);
     if (opened.gauge) store_gauge_instrument(store, id, *opened.gauge, first_seq);  // identity, resolution, rate
+    if (opened.ballbar) store_bar_resolution(store, id, *opened.ballbar, first_seq);
     return sum;
 }
 

@@ -233,6 +233,14 @@ void StoreSink::finish(const acq::SessionSummary& summary) {
     }
 }
 
+void store_bar_resolution(storage::Store& store, std::int64_t session_id, const DeviceSource& source,
+                          std::uint64_t first_seq) {
+    // Discovery calls nothing below the instrument's resolution structure (docs/discovery.md).
+    if (source.info() && source.info()->resolution_um > 0)
+        store.set_segment_instrument(session_id, first_seq, source.info()->resolution_um * 1e-3,
+                                     source.sample_rate_hz());
+}
+
 storage::Instrument stored_instrument(const device::InstrumentInfo& info) {
     storage::Instrument in;
     in.model = info.model;

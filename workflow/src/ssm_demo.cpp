@@ -167,6 +167,7 @@ SsmDemoResult run_ssm_demo(storage::Store& store, const SsmDemoOptions& o, const
     acq::Session session(plan, source, sink, front ? static_cast<acq::Operator&>(*front) : op, so);
     out.summary = session.run();
     sink.finish(out.summary);
+    store_bar_resolution(store, id, source, 0);
     emulator.halt();  // the emulator's state is read without racing its thread from here on
     out.check = check_against_truth(store, id, emulator.emulator());
     const auto& ec = emulator.emulator().counters();

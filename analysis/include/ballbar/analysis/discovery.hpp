@@ -43,6 +43,9 @@ struct DiscoveryOptions {
     /// The measurement noise of one reading (mm), when the user knows it; otherwise it is estimated
     /// from the readings (estimate_noise_floor).
     std::optional<double> noise_mm;
+    /// The instrument's resolution (mm), when known: the estimated floor is never below resolution/√12
+    /// (its quantisation), so nothing below what the instrument can tell apart is called structure.
+    std::optional<double> resolution_mm;
     /// The residual is unexplained structure when P(χ² ≥ observed) under the noise floor is below this.
     double noise_alpha = 0.001;
     /// Family-wise false-alarm rate of one search beyond the library (Bonferroni over its groups of
@@ -83,6 +86,9 @@ struct NoiseFloor {
     double sigma_mm = 0;  ///< 0: unknown
     std::string source;   ///< "given", "within-point spread", "repeated points", "unknown"
     std::string detail;   ///< e.g. "252 readings, n = 40 samples each"
+    /// The data's floor was below the instrument's resolution/√12 and was raised to it: a residual
+    /// below it is nothing the instrument can show, and the library adds no effect to explain it.
+    bool raised_to_resolution = false;
     bool known() const { return sigma_mm > 0; }
 };
 
@@ -90,7 +96,7 @@ struct NoiseFloor {
 /// (σ² = mean of std_mm²/n over the readings that give it, at least half of them), or the spread of
 /// the residuals `residual_mm` of repeated points (same socket and pose; at least 10 degrees of freedom).
 NoiseFloor estimate_noise_floor(const ReadingSet& readings, const Eigen::VectorXd& residual_mm,
-                                std::optional<double> user_mm);
+                                std::optional<double> user_mm, std::optional<double> resolution_mm = std::nullopt);
 
 /// Is the residual consistent with the noise floor? χ² = Σr²/σ², dof = readings − fitted unknowns,
 /// p = P(χ²(dof) ≥ χ²); unexplained structure when p < alpha.

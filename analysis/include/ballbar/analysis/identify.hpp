@@ -70,6 +70,16 @@ struct ParamEstimate {
     double sensitivity = 0;      ///< RMS over readings of |∂reading/∂parameter| (mm per unit)
     double independence = 0;     ///< 0..1, see the file comment
     bool observable = false;     ///< false: excluded from the fit, held at its fixed value
+    /// An unobservable parameter whose effect this estimate carries: the data determine only the
+    /// combination, so the estimate is the machine's value plus `per_unit` (this estimate's unit per
+    /// the held parameter's) times what the held parameter really is beyond its fixed value.
+    struct Carried {
+        std::string name;
+        double per_unit = 0;
+    };
+    /// The held parameters whose unit-scaled effect this estimate carries by 0.1 or more (observable
+    /// estimates only; docs/identification.md, Observability). `std` is the uncertainty given them.
+    std::vector<Carried> carries;
 };
 
 struct FitSummary {

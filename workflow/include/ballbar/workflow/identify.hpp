@@ -25,6 +25,9 @@ struct ReadingInputs {
     std::vector<analysis::ReadingSet> sets;
     std::vector<std::int64_t> sessions;  ///< the inputs that were sessions
     std::vector<std::string> names;      ///< "session 3" or the file's path, per set
+    /// The coarsest resolution of the instruments that measured the sessions (their sample segments):
+    /// no residual below it is structure. Empty when no input says it (readings files).
+    std::optional<double> resolution_mm;
 };
 
 /// Opens the database a use case reads sessions from or writes to, when it first needs it.

@@ -36,6 +36,7 @@ class DeviceSource : public acquisition::SampleSource {
     bool reconnect(std::chrono::milliseconds timeout) override;
 
     const std::optional<device::InstrumentInfo>& info() const { return info_; }
+    int sample_rate_hz() const { return rate_hz_; }  ///< the rate the instrument is told to stream at
     /// Called after every identify (connect, reconnect), before anything else is asked of the instrument
     /// or the operator: records the identity with the session, checks the bar. May throw SourceError.
     std::function<void(const device::InstrumentInfo&)> on_identified;
@@ -56,6 +57,11 @@ class DeviceSource : public acquisition::SampleSource {
 /// and demos), else the URI's transport; a URI that names no transport is a SourceError (the session says
 /// so as a link failure).
 DeviceSource::Opener device_opener(std::string uri, DeviceSource::Opener override = {});
+
+/// Records the bar's resolution and streaming rate on the session's segments from `first_seq` (the
+/// ones this connection wrote), once the instrument has identified itself; nothing otherwise.
+void store_bar_resolution(storage::Store& store, std::int64_t session_id, const DeviceSource& source,
+                          std::uint64_t first_seq);
 
 /// The instrument a session measures with, as the acquisition's sample source: a digital gauge for a
 /// gauge URI (sylvac:, mitutoyo-itn:, digimatic:, modbus:; docs/instruments.md), else the ball-bar's
