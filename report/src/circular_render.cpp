@@ -54,7 +54,7 @@ void conditions(Document& doc, const Report& r) {
                                       (h.instrument_serial.empty() ? "" : ", serial " + h.instrument_serial));
     kv.emplace_back("Calibrated", or_dash(h.instrument_calibration_date) +
                                       (h.calibrated_length_mm ? ", " + fixed(*h.calibrated_length_mm, 4) + " mm" : ""));
-    kv.emplace_back("Date", or_dash(h.started_at));
+    kv.emplace_back("Date", local_time(h.started_at));
     kv.emplace_back("Operator", or_dash(h.operator_name));
     kv.emplace_back("Status", or_dash(h.status));
     kv.emplace_back("Software", "ballbar " + or_dash(h.software_version));

@@ -4,6 +4,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdio>
+#include <ctime>
 
 #include "ballbar/analysis/types.hpp"
 
@@ -60,6 +62,27 @@ std::string range_C(const Range& r) {
 
 std::string or_dash(const std::string& s) {
     return s.empty() ? "–" : s;
+}
+
+std::string local_time(const std::string& utc_iso) {
+    if (utc_iso.empty()) return "–";
+    std::tm t{};
+    int sec = 0;
+    if (std::sscanf(utc_iso.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d", &t.tm_year, &t.tm_mon, &t.tm_mday, &t.tm_hour,
+                    &t.tm_min, &sec) != 6 ||
+        utc_iso.back() != 'Z')
+        return utc_iso;
+    t.tm_year -= 1900;
+    t.tm_mon -= 1;
+    t.tm_sec = sec;
+    const std::time_t when = timegm(&t);
+    std::tm local{};
+    if (when == static_cast<std::time_t>(-1) || !localtime_r(&when, &local)) return utc_iso;
+    char text[40];
+    if (std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S %z", &local) == 0) return utc_iso;
+    std::string out = text;  // "+0100" → "+01:00"
+    if (out.size() >= 5) out.insert(out.size() - 2, ":");
+    return out;
 }
 
 }  // namespace ballbar::report

@@ -31,5 +31,8 @@ std::string clock_time(double seconds);
 std::string range_C(const Range& r);
 /// The text, or "–" when empty.
 std::string or_dash(const std::string& s);
+/// A stored UTC timestamp ("2026-12-05T04:46:15.046Z") as local time with its offset, to the second
+/// ("2026-12-05 05:46:15 +01:00"); "–" for an empty one, the text itself when it is not such a time.
+std::string local_time(const std::string& utc_iso);
 
 }  // namespace ballbar::report

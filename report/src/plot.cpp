@@ -163,7 +163,9 @@ void Plot::draw(cairo_t* cr, Rect area) const {
     const bool has_legend = std::any_of(series_.begin(), series_.end(), [](const auto& s) { return !s.name.empty(); });
     const double legend_w = area.w - (kLabelSize + 4);
     const int legend_rows = has_legend || !note_.empty() ? draw_legend(cr, {area.x, legend_y, legend_w, 0}, false) : 0;
-    const double top = legend_y + (legend_rows > 0 ? legend_rows * (kLegendSize + 4) + 2 : 2);
+    // The y axis's top tick label is centred on the frame's top edge: half a label of room below the
+    // legend, so the two never overlap.
+    const double top = legend_y + (legend_rows > 0 ? legend_rows * (kLegendSize + 4) + kLabelSize / 2.0 + 2 : 2);
 
     // Pad the data range by 4 % (not for categories or explicit ranges) and find ticks.
     if (categories_.empty() && !x_range_) {

@@ -33,8 +33,8 @@ void setup_section(Document& doc, const Report& r) {
     if (m.type != analysis::MachineType::RRTTT) kv.emplace_back("A-axis pivot", vec_mm(m.a_pivot_mm));
     if (m.type == analysis::MachineType::TTTRR) kv.emplace_back("C-frame offset", vec_mm(m.c_offset_mm));
     kv.emplace_back("Operator", or_dash(h.operator_name));
-    kv.emplace_back("Started", or_dash(h.started_at));
-    kv.emplace_back("Finished", or_dash(h.finished_at));
+    kv.emplace_back("Started", local_time(h.started_at));
+    kv.emplace_back("Finished", local_time(h.finished_at));
     kv.emplace_back("Status", or_dash(h.status));
     kv.emplace_back("Instrument", or_dash(h.instrument_model));
     kv.emplace_back("Serial", or_dash(h.instrument_serial));
@@ -48,6 +48,20 @@ void setup_section(Document& doc, const Report& r) {
     doc.heading("Set-up", 60);
     doc.key_values(kv, 2);
     if (!h.notes.empty()) doc.paragraph("Notes: " + h.notes);
+}
+
+/// Which locations an orientation error came from, in the CLI's words: "test 2" when both are that
+/// test's steps (labelled "test 2 step 1, …"), else the locations' numbers ("L3 → L4").
+std::string orientation_source(const Report& r, const OrientationError& o) {
+    if (o.from_location < 0) return "–";
+    const auto test_of = [&r](int location) -> std::string {
+        for (const auto& l : r.locations)
+            if (l.location == location && l.label.starts_with("test ")) return l.label.substr(0, l.label.find(" step"));
+        return {};
+    };
+    const std::string a = test_of(o.from_location), b = test_of(o.to_location);
+    if (!a.empty() && a == b) return a;
+    return "L" + std::to_string(o.from_location) + " → L" + std::to_string(o.to_location);
 }
 
 void results_section(Document& doc, const Report& r) {
@@ -85,8 +99,7 @@ void results_section(Document& doc, const Report& r) {
         7, kGrey);
     std::vector<std::vector<std::string>> rows;
     for (const auto& o : r.orientation) {
-        const std::string from =
-            o.from_location >= 0 ? "L" + std::to_string(o.from_location) + " → L" + std::to_string(o.to_location) : "–";
+        const std::string from = orientation_source(r, o);
         rows.push_back(
             {o.symbol, o.axis, o.commanded_rad ? fixed(analysis::rad_to_deg(*o.commanded_rad), 3) + "°" : "–",
              degrees(o.first_order_rad), arcseconds(o.first_order_rad), degrees(o.exact_rad), arcseconds(o.exact_rad),
@@ -120,8 +133,24 @@ void procedure_section(Document& doc, const Report& r) {
         pauses += e.kind == "pause";
     }
     doc.paragraph(fmt::format("{} events; {} repeated, {} paused.", r.procedure.size(), repeats, pauses), 7, kGrey);
+    // Summarised: a run of three or more events of one kind and step (the points of a program, say) is
+    // one row saying how many, with its first and last detail; the rest one row each.
     std::vector<std::vector<std::string>> rows;
-    for (const auto& e : r.procedure) rows.push_back({clock_time(e.time_s), e.timestamp, e.kind, e.step, e.detail});
+    for (std::size_t i = 0; i < r.procedure.size();) {
+        const auto& e = r.procedure[i];
+        std::size_t j = i + 1;
+        while (j < r.procedure.size() && r.procedure[j].kind == e.kind && r.procedure[j].step == e.step) ++j;
+        if (j - i >= 3)
+            rows.push_back(
+                {clock_time(e.time_s), local_time(e.timestamp), e.kind, e.step,
+                 fmt::format("{} events, from \"{}\" to \"{}\"", j - i, e.detail, r.procedure[j - 1].detail)});
+        else
+            for (std::size_t k = i; k < j; ++k) {
+                const auto& x = r.procedure[k];
+                rows.push_back({clock_time(x.time_s), local_time(x.timestamp), x.kind, x.step, x.detail});
+            }
+        i = j;
+    }
     doc.table({{"time", 0.6, HAlign::Right}, {"timestamp", 1.6}, {"event", 0.7}, {"step", 1.4}, {"detail", 3.0}}, rows);
 }
 
@@ -200,7 +229,7 @@ int layout(cairo_surface_t* surface, const Report& r, int total_pages) {
                    : h.machine.name.empty()
                        ? std::string(analysis::to_string(h.machine.type))
                        : h.machine.name + " (" + std::string(analysis::to_string(h.machine.type)) + ")") +
-                  (h.started_at.empty() ? "" : " · " + h.started_at));
+                  (h.started_at.empty() ? "" : " · " + local_time(h.started_at)));
     if (circular) {  // a circular test: its own conditions and figures instead of the SSM's
         circular_sections(doc, r);
         doc.heading("Bar reading", 200);
