@@ -268,8 +268,11 @@ int ballbar::app::cli_main(int argc, char** argv) {
         const int code = globals.action ? globals.action() : kExitOk;
         return code == kExitOk && g_database_damaged ? kExitFailure : code;
     } catch (const std::exception& e) {
-        // Every error once, in the one format; its category decides the exit code (command.hpp).
-        std::cerr << "ballbar: error: " << printable(readable_message(e.what()), true) << '\n';
-        return exit_code(workflow::category_of(e));
+        // Every error once, in the one format; its category decides the exit code (command.hpp). A
+        // session stopped on purpose (Ctrl-C, an abort at a prompt) is no error: it is said as what it is.
+        const auto category = workflow::category_of(e);
+        std::cerr << (category == workflow::ErrorCategory::interrupted ? "ballbar: stopped: " : "ballbar: error: ")
+                  << printable(readable_message(e.what()), true) << '\n';
+        return exit_code(category);
     }
 }

@@ -19,6 +19,7 @@
 
 #include "ballbar/acquisition/circle_program.hpp"
 #include "ballbar/acquisition/circular_session.hpp"
+#include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
 #include "ballbar/storage/trace_file.hpp"
@@ -183,6 +184,7 @@ struct MeasureOptions {
     bool feed_in_given = false;  ///< --feed-in on the command line (else fitted to the bar's range)
     std::string resume;
     std::string operator_name;
+    std::string machine_file;  ///< --machine: the machine tested (ballbar-machine/1)
     bool non_interactive = false;
     bool json = false;
 };
@@ -251,6 +253,13 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     workflow::CircularMeasureOptions mo;
     mo.device_uri = o.device;
     mo.operator_name = o.operator_name;
+    if (!o.machine_file.empty()) {
+        try {
+            mo.machine = acq::parse_machine_file(read_file(o.machine_file, "machine file")).geometry;
+        } catch (const acq::PlanError& e) {
+            throw Error(ErrorCategory::bad_input, o.machine_file + ": " + e.what());
+        }
+    }
     mo.stop = InterruptGuard::flag();
     // A test the operator did not shape (no --test, no --feed-in) takes the feed-in the bar's range holds;
     // the program and the stored header follow it.
@@ -411,6 +420,8 @@ void add_circle_measure(CLI::App& circle, Globals& globals) {
     m->add_option("--program", o->program_file, "where to write the part program (default ballbar-session-ID.nc)");
     m->add_option("--resume", o->resume, "continue an interrupted circular session (id or uuid prefix)");
     m->add_option("--operator", o->operator_name, "operator name stored with the session");
+    m->add_option("--machine", o->machine_file,
+                  "the machine tested (its machine file): the session is listed and trended under it");
     m->add_flag("--non-interactive", o->non_interactive, "answer every question yes (logged)");
     m->add_flag("--json", o->json, "events as JSON lines on stdout (answers from stdin unless --non-interactive)");
     m->callback([o, feed_in, &globals] {

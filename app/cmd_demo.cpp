@@ -52,7 +52,6 @@ struct DemoOptions {
     double arc_deg = 0;
 };
 
-/// --faults SPEC: the emulator's "faults" object, inline JSON or a file holding it.
 /// The angles of one orientation entry in arcseconds ("d_alpha -46.66\""): those under `prefix` + name
 /// + "_rad", the measured ones (prefix "") with ± their standard uncertainty and flagged (figures.hpp)
 /// when more than 5σ from the true value.
@@ -170,12 +169,17 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     out["machine"] = o.machine;
     out["locations"] = ojson::array();
     out["orientation"] = ojson::array();
-    for (const auto& [l, tr] : run.locations)
+    for (const auto& [l, tr] : run.locations) {
+        // ΔV as `measure` prints it (the seed's sign: the moving element's error), beside e.
+        const double sign = acq::dv_sign(plan, l.test);
         out["locations"].push_back({{"test", l.test + 1},
                                     {"step", l.step},
                                     {"e_mm", vec3_json(l.ssm.exact_mm)},
                                     {"e_mm_std", vec3_json(l.ssm.std_mm)},
-                                    {"true_e_mm", vec3_json(tr)}});
+                                    {"true_e_mm", vec3_json(tr)},
+                                    {"dV_mm", vec3_json(l.dV_mm)},
+                                    {"true_dV_mm", vec3_json(sign * tr)}});
+    }
     for (const auto& r : sum.tests) {
         const auto& t = run.truth[static_cast<std::size_t>(r.test)];
         ojson o_j = {{"test", r.test + 1}, {"kind", std::string(acq::to_string(r.kind))}};
@@ -224,14 +228,16 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     if (o.json) {
         std::cout << out.dump() << std::endl;
     } else {
-        std::printf("\nTotal position errors e = (b - s)actual - (b - s)nominal, µm (SSM exact, %s layout):\n",
-                    std::string(ba::to_string(plan.spec.layout)).c_str());
+        std::printf(
+            "\nLocation errors ΔV, µm (as `measure` prints them: the moving element's error, ΔV = ±e with\n"
+            "e = (b - s)actual - (b - s)nominal; SSM exact, %s layout):\n",
+            std::string(ba::to_string(plan.spec.layout)).c_str());
         std::printf(
             "  test step   measured (x, y, z)              true (x, y, z)                  |diff|   (!! more than "
             "5σ from the truth)\n");
         for (const auto& l : out["locations"]) {
-            const auto& m = l["e_mm"];
-            const auto& t = l["true_e_mm"];
+            const auto& m = l["dV_mm"];
+            const auto& t = l["true_dV_mm"];
             const double d =
                 std::hypot(m[0].get<double>() - t[0].get<double>(), m[1].get<double>() - t[1].get<double>(),
                            m[2].get<double>() - t[2].get<double>());

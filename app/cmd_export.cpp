@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // `ballbar export SESSION --format readings|json|csv --out PATH`. readings: the interchange file; json: the
 // whole session (metadata, transitions, points, results); csv: PATH is a directory that receives
-// points.csv and samples.csv (docs/storage.md). `--out -` writes readings or json to stdout.
+// points.csv and samples.csv (docs/storage.md), or NAME.csv: NAME-points.csv and NAME-samples.csv. `--out -` writes
+// readings or json to stdout.
 #include <filesystem>
 #include <iostream>
 
@@ -38,9 +39,21 @@ int run_export(const ExportOptions& o, const Globals& globals) {
             write_text(o.out, workflow::export_session(store, id, format));
         } else {
             if (o.out == "-")
-                throw Error(ErrorCategory::bad_input, "--format csv writes two files: give --out DIRECTORY");
+                throw Error(ErrorCategory::bad_input,
+                            "--format csv writes two files: give --out DIRECTORY or --out NAME.csv");
+            const std::filesystem::path out(o.out);
+            if (out.extension() == ".csv" || out.extension() == ".CSV") {
+                // A file name, not a directory to make: NAME-points.csv and NAME-samples.csv beside it.
+                const auto stem = out.parent_path() / out.stem();
+                const std::string points = stem.string() + "-points" + out.extension().string(),
+                                  samples = stem.string() + "-samples" + out.extension().string();
+                for (const auto& f : {points, samples}) fileio::check_output(f, "--out", inputs);
+                storage::export_csv_files(store, id, points, samples);
+                std::cerr << "ballbar: exported session " << id << " (csv) to " << points << " and " << samples << '\n';
+                return kExitOk;
+            }
             for (const char* name : {"points.csv", "samples.csv"})
-                fileio::check_output((std::filesystem::path(o.out) / name).string(), "--out", inputs);
+                fileio::check_output((out / name).string(), "--out", inputs);
             storage::export_csv(store, id, o.out);
         }
         if (o.out != "-")
@@ -61,7 +74,10 @@ BALLBAR_COMMAND(export) {
     sub->add_option("--format", opts->format, "readings | json | csv | trace (a circular test)")
         ->check(CLI::IsMember({"readings", "json", "csv", "trace"}))
         ->capture_default_str();
-    sub->add_option("--out", opts->out, "output file (readings, json; - for stdout) or directory (csv)")->required();
+    sub->add_option("--out", opts->out,
+                    "output file (readings, json; - for stdout); csv: a directory, or NAME.csv for NAME-points.csv and "
+                    "NAME-samples.csv")
+        ->required();
     sub->callback(
         [opts, &globals] { globals.action = [opts, &globals] { return ballbar::app::run_export(*opts, globals); }; });
 }

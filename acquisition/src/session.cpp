@@ -167,8 +167,9 @@ void Session::check_instrument() {
 void Session::set_up() {
     const MachineGeometry& g = plan_.machine.geometry;
     std::ostringstream os;
-    os << to_string(g.type) << " two-step SSM, " << plan_.test_count() << " tests, " << to_string(plan_.spec.layout)
-       << " layout (" << plan_.points_per_step << " points a step), bar " << plan_.spec.bar_length_mm << " mm.\n";
+    os << to_string(g.type) << " two-step SSM, " << plan_.test_count()
+       << (plan_.test_count() == 1 ? " test, " : " tests, ") << to_string(plan_.spec.layout) << " layout ("
+       << plan_.points_per_step << " points a step), bar " << plan_.spec.bar_length_mm << " mm.\n";
     switch (g.type) {
         case MachineType::RRTTT:
             os << "Mount the magnetic socket on the machine table (the reference); the tool ball rides in the spindle.";

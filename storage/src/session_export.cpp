@@ -208,11 +208,17 @@ void export_csv(Store& store, std::int64_t id, const std::filesystem::path& dir)
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
+    export_csv_files(store, id, dir / "points.csv", dir / "samples.csv");
+}
+
+void export_csv_files(Store& store, std::int64_t id, const std::filesystem::path& points_path,
+                      const std::filesystem::path& samples_path) {
+    store.session(id);  // not_found before writing anything
     // fileio: exclusive temporary files, no links. Both are written in full before either replaces
-    // anything: a full disk or a damaged database half-way leaves the directory as it was, never a new
-    // points.csv beside an old samples.csv.
-    fileio::OutputStream points((dir / "points.csv").string(), "--out");
-    fileio::OutputStream samples((dir / "samples.csv").string(), "--out");
+    // anything: a full disk or a damaged database half-way leaves the files as they were, never a new
+    // points file beside an old samples file.
+    fileio::OutputStream points(points_path.string(), "--out");
+    fileio::OutputStream samples(samples_path.string(), "--out");
     write_points_csv(store, id, points);
     write_samples_csv(store, id, samples);
     points.finish();

@@ -178,9 +178,9 @@ TEST(Demo, SessionsShowGivesEachResultsValuesWithUnits) {
     const DemoRun shown = run_demo("--db " + db.string() + " sessions show " + std::to_string(id));
     ASSERT_EQ(shown.status, 0) << shown.out;
     // Each SSM location's error with its uncertainty, each test's orientation errors in arc-seconds.
-    EXPECT_NE(shown.out.find("test 1 step 1: e ("), std::string::npos) << shown.out;
+    EXPECT_NE(shown.out.find("test 1 step 1: ΔV ("), std::string::npos) << shown.out;  // as measure prints it
     EXPECT_NE(shown.out.find(") ± ("), std::string::npos) << shown.out;
-    EXPECT_NE(shown.out.find(" µm, ΔV ("), std::string::npos) << shown.out;
+    EXPECT_NE(shown.out.find(" µm, e ("), std::string::npos) << shown.out;
     EXPECT_NE(shown.out.find("test 1 (BothAxes): Δα "), std::string::npos) << shown.out;
     EXPECT_NE(shown.out.find("″ Δγ "), std::string::npos) << shown.out;
 }

@@ -184,8 +184,8 @@ TEST(CliSessions, TheListFiltersByMachineProcedureStateAndDateAndKeepsDemosApart
     EXPECT_EQ(count("--since 2000-01-01"), 2u);
     EXPECT_EQ(count("--since 2999-01-01"), 0u);
     const auto listed = nlohmann::json::parse(run(dir, "sessions --json").out);
-    const std::string machine = listed[0]["machine"]["type"].get<std::string>() + " " +
-                                listed[0]["machine"]["name"].get<std::string>();
+    const std::string machine =
+        listed[0]["machine"]["type"].get<std::string>() + " " + listed[0]["machine"]["name"].get<std::string>();
     EXPECT_EQ(count("--machine '" + machine + "'"), 1u) << machine;
     EXPECT_NE(run(dir, "sessions --since 2999-01-01").out.find("no sessions match the filters"), std::string::npos);
     EXPECT_EQ(run(dir, "sessions --since yesterday").code, 2);

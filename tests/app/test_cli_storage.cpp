@@ -172,6 +172,14 @@ TEST(CliStorage, CsvExportWritesPointsAndSamples) {
     EXPECT_EQ(std::count(points.begin(), points.end(), '\n'), 9);
     EXPECT_EQ(points.rfind("index,location,point,step,X_mm", 0), 0u);
     EXPECT_EQ(slurp(d.file("csv/samples.csv")), "seq,device_time_us,displacement_nm,flags,bar_temp_C\n");
+
+    // --out NAME.csv names files, not a directory to make: NAME-points.csv and NAME-samples.csv.
+    const CliRun f = run(d, "export 1 --format csv --out '" + d.file("session.csv") + "'");
+    ASSERT_EQ(f.code, 0) << f.err;
+    EXPECT_FALSE(std::filesystem::exists(d.file("session.csv"))) << "no directory named session.csv";
+    EXPECT_EQ(slurp(d.file("session-points.csv")), points);
+    EXPECT_EQ(slurp(d.file("session-samples.csv")), "seq,device_time_us,displacement_nm,flags,bar_temp_C\n");
+    EXPECT_NE(f.err.find("session-points.csv and "), std::string::npos) << f.err;
 }
 
 TEST(CliStorage, NewerDatabaseIsRefused) {

@@ -198,9 +198,15 @@ TEST(CircleMeasure, TwoProcessesEmulatePtyAndMeasureStoreAnAnalysableSession) {
     Emulate emu = start_emulator(dir);
     ASSERT_EQ(emu.pty.rfind("/dev/pts/", 0), 0u) << emu.pty;
     const auto m = run(dir, "circle measure --device serial:" + emu.pty + " --test '" + test + "' --program '" +
-                                dir.file("circle.nc") + "' --non-interactive --json");
+                                dir.file("circle.nc") + "' --machine '" + BALLBAR_TEST_DATA_DIR +
+                                "/machines/tttrr.json' --non-interactive --json");
     stop_emulator(emu);
     ASSERT_EQ(m.code, 0) << m.err << m.out;
+    // Stored under the machine tested (its file's name), not as "circular test".
+    const auto listed = json::parse(run(dir, "sessions --json").out);
+    ASSERT_EQ(listed.size(), 1u);
+    EXPECT_EQ(listed[0]["machine"]["type"], "TTTRR") << listed.dump(1);
+    EXPECT_NE(listed[0]["machine"]["name"], "circular test") << listed.dump(1);
     EXPECT_NE(m.out.find("\"event\":\"run_program\""), std::string::npos) << m.out;
     const auto done = json::parse(m.out.substr(m.out.rfind("{\"event\":\"done\"")));
     const auto diag = [&done](const char* key) {

@@ -428,6 +428,8 @@ void Procedure::run(json request) {
                 mo.device_uri = request.value("device", "");
                 mo.operator_name = request.value("operator", "");
                 mo.notes = "ballbar serve";
+                if (request.contains("machine_file"))  // the machine tested: listed and trended under it
+                    mo.machine = acq::parse_machine_file(request.at("machine_file").get<std::string>()).geometry;
                 mo.fit_feed_in = resume.empty();
                 mo.stop = &stop_;
                 mo.on_session_created = [&](std::int64_t id, const circ::TestSpec&) {

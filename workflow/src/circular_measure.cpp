@@ -107,9 +107,12 @@ std::int64_t CircularStoreSink::stored(std::uint64_t source_seq) const {
 
 std::int64_t create_circular_session(storage::Store& store, const circ::TestSpec& test, analysis::NcDialect dialect,
                                      double dwell_s, storage::SessionSource source, const std::string& operator_name,
-                                     const std::string& notes) {
+                                     const std::string& notes, const analysis::MachineGeometry* machine) {
     storage::NewSession ns;
-    ns.machine.name = "circular test";
+    if (machine)
+        ns.machine = *machine;
+    else
+        ns.machine.name = "circular test";
     ns.source = source;
     ns.operator_name = operator_name;
     ns.procedure = "circular";
@@ -180,7 +183,7 @@ CircularMeasureResult measure_circular(storage::Store& store, const PreparedCirc
         const std::int64_t id = create_circular_session(
             store, out.test, prepared.dialect, prepared.dwell_s,
             uri.starts_with("emulator:") ? storage::SessionSource::emulator : storage::SessionSource::device,
-            o.operator_name, o.notes);
+            o.operator_name, o.notes, o.machine ? &*o.machine : nullptr);
         if (o.on_session_created) o.on_session_created(id, out.test);
         return id;
     };

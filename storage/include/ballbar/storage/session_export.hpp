@@ -27,5 +27,8 @@ void write_points_csv(Store& store, std::int64_t session_id, std::ostream& out);
 void write_samples_csv(Store& store, std::int64_t session_id, std::ostream& out);
 /// Creates `dir` if needed and writes dir/points.csv and dir/samples.csv. Throws std::runtime_error.
 void export_csv(Store& store, std::int64_t session_id, const std::filesystem::path& dir);
+/// Writes the points' and the samples' CSV to the two files given (both or neither replaced).
+void export_csv_files(Store& store, std::int64_t session_id, const std::filesystem::path& points,
+                      const std::filesystem::path& samples);
 
 }  // namespace ballbar::storage

@@ -72,9 +72,11 @@ class CircularStoreSink : public acquisition::CircularSink {
 
 /// A new, started circular session holding the test header, as `import` makes one, plus the part
 /// program's dialect and dwell (a resume writes the same program).
+/// `machine`: the machine tested (its machine file's geometry and name); none: stored as "circular test".
 std::int64_t create_circular_session(storage::Store& store, const analysis::circular::TestSpec& test,
                                      analysis::NcDialect dialect, double dwell_s, storage::SessionSource source,
-                                     const std::string& operator_name, const std::string& notes);
+                                     const std::string& operator_name, const std::string& notes,
+                                     const analysis::MachineGeometry* machine = nullptr);
 
 /// A circular session's stored trace analysed as `circle analyze SESSION` does, its result stored with it
 /// (kind "circular"). Error (failed) naming the session when the stored trace cannot be analysed.
@@ -109,6 +111,8 @@ struct CircularMeasureOptions {
     std::string device_uri;
     std::string operator_name;
     std::string notes = "circle measure";
+    /// The machine tested (`circle measure --machine FILE`): its sessions are listed and trended under it.
+    std::optional<analysis::MachineGeometry> machine;
     /// Fit the feed-in to the bar's range (a test the operator did not shape); the program and the stored
     /// header follow it (on_test_fitted).
     bool fit_feed_in = false;
