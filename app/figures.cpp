@@ -88,6 +88,10 @@ std::string estimate_text(const ba::ParamEstimate& e) {
     return e.name + "  " + with_uncertainty(e.estimate * u.factor, e.std * u.factor, u.symbol);
 }
 
+/// A held parameter's effect an estimate carries by this share or more is said on screen (the rest is
+/// in `--json`'s numbers and moves the estimate by less than a tenth of what the held one does).
+constexpr double kCarriedShare = 0.1;
+
 std::string fit_report(const ba::FitSummary& fit) {
     std::ostringstream os;
     char line[320];
@@ -107,7 +111,8 @@ std::string fit_report(const ba::FitSummary& fit) {
         const ScreenUnit u = e.param ? screen_unit(ba::param_info(*e.param).unit) : ScreenUnit{1e3, "µm"};
         if (e.observable) {
             std::string held;
-            for (const auto& c : e.carries) held += (held.empty() ? "" : ", ") + c.name;
+            for (const auto& c : e.carries)
+                if (std::abs(c.share) >= kCarriedShare) held += (held.empty() ? "" : ", ") + c.name;
             std::snprintf(line, sizeof line, "  %-10s %28s  (independence %.2f)%s\n", e.name.c_str(),
                           with_uncertainty(e.estimate * u.factor, e.std * u.factor, u.symbol).c_str(), e.independence,
                           held.empty() ? "" : ("  with " + held + " at 0: not the machine's alone").c_str());
@@ -125,6 +130,7 @@ std::string carried_note(const ba::FitSummary& fit) {
     std::vector<std::string> held, carriers;
     for (const auto& e : fit.estimates)
         for (const auto& c : e.carries) {
+            if (std::abs(c.share) < kCarriedShare) continue;
             if (std::find(held.begin(), held.end(), c.name) == held.end()) held.push_back(c.name);
             if (e.param && std::find(carriers.begin(), carriers.end(), e.name) == carriers.end())
                 carriers.push_back(e.name);
@@ -140,10 +146,13 @@ std::string carried_note(const ba::FitSummary& fit) {
        << " carry their effect, so only combinations are known — each value above is the machine's plus "
           "what the held ones really are times:\n";
     for (const auto& e : fit.estimates) {
-        if (!e.param || e.carries.empty()) continue;
+        if (!e.param || std::none_of(e.carries.begin(), e.carries.end(),
+                                     [](const auto& c) { return std::abs(c.share) >= kCarriedShare; }))
+            continue;
         const ScreenUnit u = screen_unit(ba::param_info(*e.param).unit);
         os << "    " << e.name << ":";
         for (const auto& c : e.carries) {
+            if (std::abs(c.share) < kCarriedShare) continue;
             const ba::ParamEstimate* h = fit.find(c.name);
             const ScreenUnit hu = h && h->param ? screen_unit(ba::param_info(*h->param).unit) : ScreenUnit{1e3, "µm"};
             char buf[120];

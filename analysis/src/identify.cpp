@@ -355,13 +355,6 @@ FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
         if (std::find(cols.begin(), cols.end(), static_cast<int>(c)) == cols.end() &&
             out.estimates[c].sensitivity > opt.min_sensitivity)
             held.push_back(c);
-    Eigen::MatrixXd jh(jac_full.rows(), static_cast<Eigen::Index>(held.size()));
-    Eigen::VectorXd held_norm(static_cast<Eigen::Index>(held.size()));
-    for (std::size_t k = 0; k < held.size(); ++k) {
-        const auto col = jac_full.col(static_cast<Eigen::Index>(held[k]));
-        held_norm[static_cast<Eigen::Index>(k)] = col.norm();
-        jh.col(static_cast<Eigen::Index>(k)) = col / col.norm();
-    }
     set_jacobian(select(jac_full));
     jac_full = Eigen::MatrixXd();
     out.jacobian_evaluations = 1;
@@ -481,15 +474,32 @@ FitSummary fit_error_model(const ReadingSet& readings, const FitOptions& opt) {
                 out.correlation(j, k) = ainv(j, k) / std::sqrt(ainv(j, j) * ainv(k, k));
         }
         if (!held.empty()) {
-            // A held unit direction h ≈ Σ js_j q_j: q = (jsᵀjs)⁻¹ jsᵀ h, dimensionless. The estimate of
-            // fitted j then moves by q_j · |J_h| / scale_j (its unit) per unit of the held parameter.
-            const Eigen::MatrixXd q = ainv * (js.transpose() * jh);
+            // The held columns at the solution, unit-scaled. At most two n × m matrices live at once
+            // (docs/identification.md, memory): js is done with.
+            js = Eigen::MatrixXd();
+            Eigen::MatrixXd at_solution = jacobian(readings, prep, e, opt.free_params, offsets, opt.fit_socket_offsets);
+            Eigen::MatrixXd jh(at_solution.rows(), static_cast<Eigen::Index>(held.size()));
+            Eigen::VectorXd held_norm(static_cast<Eigen::Index>(held.size()));
+            for (std::size_t k = 0; k < held.size(); ++k) {
+                const auto col = at_solution.col(static_cast<Eigen::Index>(held[k]));
+                held_norm[static_cast<Eigen::Index>(k)] = col.norm();
+                jh.col(static_cast<Eigen::Index>(k)) = col / col.norm();
+            }
+            // A held unit direction h ≈ Σ f_j q_j over the fitted unit columns f at the solution:
+            // q = (fᵀf)⁻¹ fᵀ h, dimensionless. The estimate of fitted j then moves by q_j · |J_h| / |J_j|
+            // (its unit) per unit of the held parameter.
+            Eigen::MatrixXd f = select(at_solution);
+            at_solution = Eigen::MatrixXd();
+            const Eigen::VectorXd norm = f.colwise().norm().transpose();
+            for (Eigen::Index k = 0; k < m; ++k)
+                if (norm[k] > 0) f.col(k) /= norm[k];
+            const Eigen::MatrixXd q = (f.transpose() * f).ldlt().solve(f.transpose() * jh);
             for (Eigen::Index j = 0; j < m; ++j) {
                 auto& pe = out.estimates[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
                 for (Eigen::Index k = 0; k < q.cols(); ++k)
-                    if (std::abs(q(j, k)) >= 0.1)
-                        pe.carries.push_back(
-                            {out.estimates[held[static_cast<std::size_t>(k)]].name, q(j, k) * held_norm[k] / scale[j]});
+                    if (std::abs(q(j, k)) >= 1e-3 && norm[j] > 0)
+                        pe.carries.push_back({out.estimates[held[static_cast<std::size_t>(k)]].name,
+                                              q(j, k) * held_norm[k] / norm[j], q(j, k)});
             }
         }
     }

@@ -45,6 +45,32 @@ TEST(DiscoveryStats, FDistributionCriticalValues) {
 
 // ---- the effect library ----------------------------------------------------------------------------
 
+// Averaging 500 samples of a 0.1 µm bar gives a within-point σ of ~0.007 µm: below what the bar resolves.
+// The floor is raised to resolution/√12 and says so; a figure the user gives is kept as given.
+TEST(DiscoveryStats, TheNoiseFloorIsNeverBelowTheInstrumentsResolution) {
+    ba::ReadingSet set;
+    for (int i = 0; i < 20; ++i) {
+        ba::Reading r;
+        r.measured_mm = 100;
+        r.std_mm = 1.1e-4;  // 0.11 µm per sample
+        r.n = 500;
+        set.readings.push_back(r);
+    }
+    const Eigen::VectorXd residual = Eigen::VectorXd::Zero(20);
+    const ba::NoiseFloor spread = ba::estimate_noise_floor(set, residual, std::nullopt);
+    EXPECT_NEAR(spread.sigma_mm, 1.1e-4 / std::sqrt(500.0), 1e-12);
+    EXPECT_FALSE(spread.raised_to_resolution);
+    const ba::NoiseFloor raised = ba::estimate_noise_floor(set, residual, std::nullopt, 1e-4);
+    EXPECT_NEAR(raised.sigma_mm, 1e-4 / std::sqrt(12.0), 1e-12);
+    EXPECT_TRUE(raised.raised_to_resolution);
+    EXPECT_NE(raised.detail.find("resolution"), std::string::npos) << raised.detail;
+    const ba::NoiseFloor coarse = ba::estimate_noise_floor(set, residual, std::nullopt, 1e-6);  // 1 nm: no change
+    EXPECT_EQ(coarse.sigma_mm, spread.sigma_mm);
+    const ba::NoiseFloor given = ba::estimate_noise_floor(set, residual, 2e-6, 1e-4);
+    EXPECT_EQ(given.sigma_mm, 2e-6);
+    EXPECT_FALSE(given.raised_to_resolution);
+}
+
 TEST(EffectLibrary, HasTheIssuesEffects) {
     struct Want {
         const char *id, *iso;

@@ -246,6 +246,57 @@ TEST(Identify, UnobservableParametersAreFlaggedAndHeldFixed) {
     }
 }
 
+// A_zero of a TTTRR is a tilt A0C, a shift Y0C and socket offsets (docs/identification.md): held at 0
+// while the machine has one, it moves the estimates that carry it by exactly what `carries` says — the
+// honest report of what the readings could not separate (issue 28: Y0C −45.9 µm for a truth of −20).
+TEST(Identify, AHeldParametersRealValueMovesTheEstimatesThatCarryItByTheirCarriedRate) {
+    const MachineGeometry g = test_machine(MachineType::TTTRR);
+    const IdentificationPlan plan = plan_for(g, rotary_params_for(MachineType::TTTRR));
+    std::mt19937_64 rng(5);
+    std::vector<Param> params = reachable(plan);
+    ErrorParams truth;
+    for (Param p : params) truth[p] = random_value(p, rng);
+    truth[Param::A_zero] = -2.6e-4;  // −0.015°
+    const Simulated sim = simulate_truth(g, plan, truth, 0.0, rng);
+    params.push_back(Param::A_zero);
+    FitOptions fo;
+    fo.free_params = params;
+    const FitSummary fit = fit_error_model(sim.readings, fo);
+    ASSERT_TRUE(fit.converged);
+    ASSERT_FALSE(fit.find("A_zero")->observable);
+    int carriers = 0;
+    double largest_mm = 0, largest_rad = 0;  // the largest shift carried, per unit
+    for (std::size_t i : fit.fitted) {
+        const auto& e = fit.estimates[i];
+        if (!e.param) continue;
+        double carried = 0;
+        for (const auto& c : e.carries) {
+            EXPECT_EQ(c.name, "A_zero") << e.name;
+            carried += c.per_unit * truth[Param::A_zero];
+        }
+        double& largest = param_info(*e.param).unit == ParamUnit::mm ? largest_mm : largest_rad;
+        largest = std::max(largest, std::abs(carried));
+        if (e.carries.empty() || std::abs(e.carries.front().share) < 0.1) continue;
+        ++carriers;
+        // Noise-free readings: what a carrier carries is its whole difference from the truth, to 1 %
+        // (the model's linearity over a 0.015° turn with the other errors present).
+        EXPECT_NEAR(e.estimate, truth[*e.param] + carried, 0.01 * std::abs(carried)) << e.name;
+    }
+    // The others move by a few percent of what the carriers carry at most.
+    for (std::size_t i : fit.fitted) {
+        const auto& e = fit.estimates[i];
+        if (!e.param || (!e.carries.empty() && std::abs(e.carries.front().share) >= 0.1)) continue;
+        const double largest = param_info(*e.param).unit == ParamUnit::mm ? largest_mm : largest_rad;
+        EXPECT_LE(std::abs(e.estimate - truth[*e.param]), 0.05 * largest + 1e-9) << e.name;
+    }
+    EXPECT_GE(carriers, 2) << "A0C and Y0C at least carry A_zero";
+    for (const char* name : {"A0C", "Y0C"}) {
+        const auto& c = fit.find(name)->carries;
+        ASSERT_FALSE(c.empty()) << name;
+        EXPECT_GE(std::abs(c.front().share), 0.1) << name << ": carries a large share (said on screen)";
+    }
+}
+
 TEST(Identify, CorrelationMatrixIsAValidCorrelation) {
     const MachineGeometry g = test_machine(MachineType::RRTTT);
     const IdentificationPlan plan = plan_for(g, rotary_params_for(MachineType::RRTTT));

@@ -76,8 +76,9 @@ struct ParamEstimate {
     struct Carried {
         std::string name;
         double per_unit = 0;
+        double share = 0;  ///< the same, unit-scaled (both columns of norm 1): 1 = carried whole
     };
-    /// The held parameters whose unit-scaled effect this estimate carries by 0.1 or more (observable
+    /// The held parameters whose unit-scaled effect this estimate carries by 0.001 or more (observable
     /// estimates only; docs/identification.md, Observability). `std` is the uncertainty given them.
     std::vector<Carried> carries;
 };
