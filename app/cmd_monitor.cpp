@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // `ballbar monitor --device URI [--seconds N] [--json]`: connect, identify, stream and show the live
 // reading, sample rate, lost frames and bar temperature; with --json a summary at the end.
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -35,11 +36,11 @@ struct Summary {
     std::uint64_t n = 0;
     double mean = 0, m2 = 0;  // Welford, of the length in mm
     std::uint64_t first_us = 0, last_us = 0;
-    float temp_C = 0;
+    std::optional<double> temp_C;  ///< the last sample's bar temperature; empty: it had none
     void add(const ballbar::analysis::BarSample& s, double length_mm) {
         if (n == 0) first_us = s.device_time_us;
         last_us = s.device_time_us;
-        temp_C = s.bar_temp_C;
+        temp_C = (s.flags & ballbar::analysis::kSampleTempInvalid) ? std::nullopt : std::optional<double>(s.bar_temp_C);
         ++n;
         const double d = length_mm - mean;
         mean += d / static_cast<double>(n);
@@ -100,11 +101,13 @@ int run_monitor(const MonitorOptions& o) {
                 if (!o.json && now >= next_show) {
                     const auto& last = buf[n - 1];
                     char line[200];
-                    std::snprintf(line, sizeof line,
-                                  "%10.5f mm  (%+9.2f µm)%s  %7.1f Hz  lost frames %llu  bar %.2f °C",
+                    std::snprintf(line, sizeof line, "%10.5f mm  (%+9.2f µm)%s  %7.1f Hz  lost frames %llu  %s",
                                   last.length_mm(info.calibrated_length_mm), last.displacement_nm * 1e-3,
                                   (last.flags & analysis::kSampleOutOfRange) ? " OUT OF RANGE" : "", sum.rate_hz(),
-                                  static_cast<unsigned long long>(inst->stats().lost_frames), last.bar_temp_C);
+                                  static_cast<unsigned long long>(inst->stats().lost_frames),
+                                  (last.flags & analysis::kSampleTempInvalid)
+                                      ? "no bar temperature"
+                                      : fmt::format("bar {:.2f} °C", last.bar_temp_C).c_str());
                     std::cout << (tty ? "\r" : "") << line << (tty ? "" : "\n") << std::flush;
                     next_show = now + milliseconds(500);
                 }
@@ -136,7 +139,8 @@ int run_monitor(const MonitorOptions& o) {
                                  {"rate_hz", or_null(sum.rate_hz())},
                                  {"mean_mm", or_null(sum.mean)},
                                  {"sd_mm", or_null(sum.std_mm())},  // the readings' spread (docs/cli.md)
-                                 {"bar_temp_C", or_null(sum.temp_C)},
+                                 {"bar_temp_C", sum.temp_C && sum.n > 0 ? nlohmann::ordered_json(*sum.temp_C)
+                                                                        : nlohmann::ordered_json(nullptr)},
                                  {"invalid_frames", st.invalid_frames},
                                  {"queue_drops", st.queue_drops},
                                  {"replayed_frames", st.replayed_frames},

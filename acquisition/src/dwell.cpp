@@ -16,6 +16,7 @@ DwellDetector::DwellDetector(const DwellSettings& settings) : settings_(settings
 void DwellDetector::clear() {
     head_ = count_ = since_recompute_ = 0;
     s1_ = s2_ = sxt_ = temp_sum_ = 0;
+    temp_n_ = 0;
     flagged_ = false;
 }
 
@@ -86,7 +87,7 @@ void DwellDetector::compute(WindowStats& out) const {
     out.last_seq = last_seq_;
     out.first_time_us = first_time_;
     out.last_time_us = last_time_;
-    out.bar_temp_C = temp_sum_ / n;
+    out.bar_temp_C = temp_n_ > 0 ? std::optional<double>(temp_sum_ / static_cast<double>(temp_n_)) : std::nullopt;
     out.flagged = flagged_;
 }
 
@@ -102,8 +103,11 @@ DwellDetector::Result DwellDetector::push(const BarSample& s) {
     const double x = last_mm_ - expected_mm_;
     if (mode_ == Mode::Capturing) {
         add(x, s);
-        temp_sum_ += s.bar_temp_C;
-        if (s.flags) flagged_ = true;
+        if (!(s.flags & analysis::kSampleTempInvalid)) {
+            temp_sum_ += s.bar_temp_C;
+            ++temp_n_;
+        }
+        if (s.flags & ~analysis::kSampleTempInvalid) flagged_ = true;
         const std::size_t w = ring_.size();
         // The span of a full window: (w − 1) sample periods.
         const double span_s = settings_.window_s * static_cast<double>(w - 1) / static_cast<double>(w);

@@ -136,7 +136,7 @@ void Session::check_instrument() {
     if (status_.battery_pct < 5)
         end(Event::Fail, "battery at " + fmt(status_.battery_pct, 0) + " %: charge the bar before measuring");
     check_stop();
-    if (!status_.bar_temp_C &&
+    if (status_.has_thermometer && !status_.bar_temp_C &&
         !op_.confirm("temperature", "The bar's temperature sensor failed. Measure without bar temperature?"))
         end(Event::Fail, "bar temperature sensor failed");
     if (!status_.referenced) link_->reference();
@@ -483,7 +483,7 @@ void Session::on_captured(const AttributionEvent& ev, std::size_t /*entry*/) {
     else if (std::abs(w.mean_mm - planned.nominal_mm) > cs.tolerance_mm)
         why = "reads " + fmt(w.mean_mm) + " mm, the plan predicts " + fmt(planned.nominal_mm) + " mm";
     else if (w.flagged)
-        why = "samples flagged by the instrument (reference or temperature)";
+        why = "samples flagged by the instrument (not referenced, or after a gap)";
     if (captured_[index]) {
         fire(Event::PointRejected, point_label(planned) + ": captured already; this dwell is not stored");
         return;

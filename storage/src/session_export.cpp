@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "ballbar/analysis/sample.hpp"
 #include "ballbar/fileio/output.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
@@ -197,7 +198,8 @@ void write_samples_csv(Store& store, std::int64_t id, std::ostream& out) {
         line += ',';
         line += std::to_string(s.flags);
         line += ',';
-        line += num(static_cast<double>(std::lround(static_cast<double>(s.bar_temp_C) * 1000.0)) / 1000.0);
+        if (!(s.flags & analysis::kSampleTempInvalid))  // an empty cell: the sample has no bar temperature
+            line += num(static_cast<double>(std::lround(static_cast<double>(s.bar_temp_C) * 1000.0)) / 1000.0);
         line += '\n';
         out << line;
     });

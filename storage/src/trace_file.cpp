@@ -13,6 +13,7 @@
 
 #include "ballbar/analysis/decimal_text.hpp"
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/analysis/sample.hpp"
 #include "ballbar/fileio/input.hpp"
 #include "ballbar/fileio/json_fields.hpp"
 #include "ballbar/storage/machine_json.hpp"
@@ -401,13 +402,17 @@ std::int64_t import_trace(Store& store, const TraceFile& trace, const std::strin
             throw StorageError(StorageError::Kind::invalid,
                                "sample " + std::to_string(i + 1) + " is more than 2 mm from the reference length");
         const double us = std::round(trace.samples[i].time_s * 1e6);
-        double temp_C = 20.0;
-        if (i < trace.bar_temp_C.size() && trace.bar_temp_C[i].has_value()) temp_C = *trace.bar_temp_C[i];
+        double temp_C = 20.0;  // stored for a sample without one, and flagged so: never read back as a temperature
+        std::int64_t flags = 0;
+        if (i < trace.bar_temp_C.size() && trace.bar_temp_C[i].has_value())
+            temp_C = *trace.bar_temp_C[i];
+        else if (!trace.bar_temp_C.empty())
+            flags = analysis::kSampleTempInvalid;
         ins.bind(1, id)
             .bind(2, static_cast<std::int64_t>(i))
             .bind(3, static_cast<std::int64_t>(us))
             .bind(4, static_cast<std::int64_t>(nm))
-            .bind(5, std::int64_t{0})
+            .bind(5, flags)
             .bind(6, static_cast<std::int64_t>(std::llround(temp_C * 1000.0)));
         ins.run();
     }
@@ -445,9 +450,10 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
     t.operator_name = info.operator_name;
     t.notes = info.notes;
     t.started_at = info.started_at;
-    Statement st(store.db(),
-                 "SELECT device_time_us, displacement_nm, bar_temp_mC FROM samples WHERE session_id = ? AND seq >= ? "
-                 "AND seq <= ? ORDER BY seq");
+    Statement st(
+        store.db(),
+        "SELECT device_time_us, displacement_nm, bar_temp_mC, flags FROM samples WHERE session_id = ? AND seq >= ? "
+        "AND seq <= ? ORDER BY seq");
     st.bind(1, session_id);
     st.bind(2, window ? window->first : std::int64_t{0});
     st.bind(3, window ? window->second : std::numeric_limits<std::int64_t>::max());
@@ -460,7 +466,11 @@ TraceFile load_trace(Store& store, std::int64_t session_id) {
         const auto nm = static_cast<double>(st.column_int(1));
         t.samples.push_back({static_cast<double>(st.column_int(0)) / 1e6,
                              whole_nm ? (std::round(reference_nm) + nm) / 1e6 : reference_mm + nm * 1e-6});
-        if (bar) t.bar_temp_C.push_back(static_cast<double>(st.column_int(2)) / 1000.0);
+        // A sample without a bar temperature (a gauge's, or a failed sensor's) has none in the trace.
+        if (bar)
+            t.bar_temp_C.push_back((st.column_int(3) & analysis::kSampleTempInvalid)
+                                       ? std::nullopt
+                                       : std::optional<double>(static_cast<double>(st.column_int(2)) / 1000.0));
     }
     if (meta.contains("air_temp_C"))
         for (const auto& a : meta["air_temp_C"])

@@ -118,6 +118,40 @@ TEST(Dwell, OutOfRangeSampleVoidsTheWindow) {
     EXPECT_TRUE(o.captured.empty());
 }
 
+// A sample without a bar temperature (a gauge's, or a failed sensor's) voids nothing: the window is
+// captured unflagged, and its temperature is the mean of the samples that have one, or none at all.
+TEST(Dwell, SamplesWithoutABarTemperatureAreCapturedAndGiveNoTemperature) {
+    Stream none;
+    none.add(1000, kL + 0.0123, 0, 0.0002, analysis::kSampleTempInvalid);
+    DwellDetector d(settings());
+    d.set_expected(kL);
+    Outcome o = feed(d, none.samples);
+    ASSERT_EQ(o.captured.size(), 1u);
+    EXPECT_FALSE(o.captured[0].flagged);
+    EXPECT_FALSE(o.captured[0].bar_temp_C.has_value());
+
+    Stream some;
+    some.add(1000, kL + 0.0123);
+    for (std::size_t i = 0; i < some.samples.size(); ++i) {
+        some.samples[i].bar_temp_C = i % 2 ? 21.5f : 99.0f;  // the invalid ones carry nonsense
+        if (i % 2 == 0) some.samples[i].flags = analysis::kSampleTempInvalid;
+    }
+    DwellDetector d2(settings());
+    d2.set_expected(kL);
+    o = feed(d2, some.samples);
+    ASSERT_EQ(o.captured.size(), 1u);
+    ASSERT_TRUE(o.captured[0].bar_temp_C.has_value());
+    EXPECT_DOUBLE_EQ(*o.captured[0].bar_temp_C, 21.5);
+
+    Stream unreferenced;
+    unreferenced.add(1000, kL + 0.0123, 0, 0.0002, analysis::kSampleNotReferenced);
+    DwellDetector d3(settings());
+    d3.set_expected(kL);
+    o = feed(d3, unreferenced.samples);
+    ASSERT_EQ(o.captured.size(), 1u);
+    EXPECT_TRUE(o.captured[0].flagged);
+}
+
 TEST(Dwell, ManualCaptureTakesTheNextWindow) {
     Stream st;
     st.add(250, kL + 0.3, 0.0);

@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdio>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -197,6 +198,22 @@ TEST(GaugeCliDemo, PrintsTheErrorsAndStoresTheGaugesRateAndResolution) {
         EXPECT_NEAR(g.at("resolution_mm").get<double>(), 1e-4, 1e-12) << js.out;
         EXPECT_NEAR(g.at("reading_rate_hz").get<double>(), 20, 0.5) << js.out;
     }
+
+    // A gauge has no bar thermometer: no bar temperature anywhere (not the samples' default 20 °C), and
+    // no point rejected for it.
+    const auto report = ballbar::test::run(dir, "report " + id + " --json");
+    ASSERT_EQ(report.code, 0) << report.err;
+    EXPECT_TRUE(nlohmann::json::parse(report.out).at("header").at("temperatures_C").at("bar").is_null()) << report.out;
+    const auto text = ballbar::test::run(dir, "report " + id + " --out '" + (dir.path / "r.pdf").string() + "'");
+    ASSERT_EQ(text.code, 0) << text.err;
+    const auto samples =
+        ballbar::test::run(dir, "export " + id + " --format csv --out '" + (dir.path / "s.csv").string() + "'");
+    ASSERT_EQ(samples.code, 0) << samples.err;
+    std::ifstream in(dir.path / "s-samples.csv");
+    std::string header, first;
+    ASSERT_TRUE(std::getline(in, header) && std::getline(in, first));
+    EXPECT_EQ(header, "seq,device_time_us,displacement_nm,flags,bar_temp_C");
+    EXPECT_EQ(first.back(), ',') << first;  // the bar_temp_C cell is empty
 }
 
 INSTANTIATE_TEST_SUITE_P(Serial, GaugeCli, ::testing::Values("sylvac", "digimatic", "modbus"),

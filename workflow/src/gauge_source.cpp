@@ -37,7 +37,8 @@ acq::InstrumentStatus GaugeSource::open_and_measure() {
       << sampler_->stats().resolution_mm * 1e3 << " µm";
     s.description = d.str();
     s.battery_pct = identity_->low_battery ? 10 : 100;
-    s.bar_temp_C = std::nullopt;  // a gauge has no bar thermometer
+    s.bar_temp_C = std::nullopt;
+    s.has_thermometer = false;  // a gauge has no bar thermometer: nothing failed
     s.referenced = zero_mm_.has_value();
     s.calibrated_length_mm = bar_.calibrated_length_mm;
     s.sample_rate_hz = sampler_->stats().rate_hz;

@@ -282,7 +282,7 @@ std::vector<acq::CapturedPoint> load_points(storage::Store& store, std::int64_t 
         c.first_seq = r.first_seq.value_or(0);
         c.last_seq = r.last_seq.value_or(0);
         c.time_s = r.reading.time_s;
-        c.bar_temp_C = r.reading.bar_temp_C.value_or(20);
+        c.bar_temp_C = r.reading.bar_temp_C;
         if (at[i] < out.size()) {
             out[at[i]] = c;  // measured again (rejected results): the latest counts
         } else {

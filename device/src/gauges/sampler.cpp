@@ -103,7 +103,9 @@ std::optional<analysis::BarSample> GaugeSampler::poll(std::chrono::milliseconds 
     analysis::BarSample s;
     s.device_time_us = clock_();
     s.displacement_nm = to_nm(bar_.sign * (r->value_mm() - zero_mm_.value_or(0.0)));
-    s.flags = zero_mm_ ? 0 : analysis::kSampleNotReferenced;
+    // A gauge has no bar thermometer: its samples say so rather than carry the default 20 °C.
+    s.flags = analysis::kSampleTempInvalid;
+    if (!zero_mm_) s.flags = static_cast<std::uint16_t>(s.flags | analysis::kSampleNotReferenced);
     if (gap_) s.flags = static_cast<std::uint16_t>(s.flags | analysis::kSampleAfterGap);
     gap_ = false;
     return s;

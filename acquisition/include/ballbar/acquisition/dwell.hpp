@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "ballbar/analysis/sample.hpp"
@@ -36,8 +37,11 @@ struct WindowStats {
     std::size_t n = 0;
     std::uint64_t first_seq = 0, last_seq = 0;
     std::uint64_t first_time_us = 0, last_time_us = 0;
-    double bar_temp_C = 20;  ///< mean over the window
-    bool flagged = false;    ///< a sample had a flag other than out-of-range (not referenced, temperature)
+    /// Mean over the window's samples that carry one (no kSampleTempInvalid); empty when none does.
+    std::optional<double> bar_temp_C;
+    /// A sample had a flag that voids the window: not referenced, or the first after a gap. Out of
+    /// range voids it another way (the window restarts); no bar temperature voids nothing.
+    bool flagged = false;
 };
 
 class DwellDetector {
@@ -77,7 +81,8 @@ class DwellDetector {
     std::vector<double> ring_;  ///< deviations from expected, mm
     std::size_t head_ = 0, count_ = 0, since_recompute_ = 0;
     double s1_ = 0, s2_ = 0, sxt_ = 0;  ///< Σx, Σx², Σk·x (k = position in the window)
-    double temp_sum_ = 0;
+    double temp_sum_ = 0;               ///< Σ bar temperature over the samples that carry one
+    std::size_t temp_n_ = 0;            ///< how many do
     std::uint64_t first_seq_ = 0, first_time_ = 0, last_seq_ = 0, last_time_ = 0;
     bool flagged_ = false;
     double expected_mm_ = 0;

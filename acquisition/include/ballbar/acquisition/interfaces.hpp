@@ -41,7 +41,10 @@ class InstrumentUnfit : public SourceError {
 struct InstrumentStatus {
     std::string description;  ///< "BB-1E EMU00001 fw 1.0.0"
     double battery_pct = 100;
-    std::optional<double> bar_temp_C;  ///< empty: the sensor failed
+    std::optional<double> bar_temp_C;  ///< empty: no bar temperature (see has_thermometer)
+    /// false: an instrument without a bar thermometer (a digital gauge): it reports no bar temperature
+    /// and nothing has failed. true with bar_temp_C empty: the bar's sensor failed.
+    bool has_thermometer = true;
     bool referenced = false;
     double calibrated_length_mm = 100;
     double sample_rate_hz = 1000;
@@ -78,9 +81,9 @@ struct CapturedPoint {
     double drift_mm = 0;
     std::size_t n = 0;
     std::uint64_t first_seq = 0, last_seq = 0;
-    double time_s = 0;  ///< device time of the window's middle, since the session's first sample
-    double bar_temp_C = 20;
-    bool operator_accepted = false;  ///< failed a quality check and the operator kept it
+    double time_s = 0;                 ///< device time of the window's middle, since the session's first sample
+    std::optional<double> bar_temp_C;  ///< mean over the window; empty: no sample had a bar temperature
+    bool operator_accepted = false;    ///< failed a quality check and the operator kept it
     /// Why this dwell is this point: the code read from the bar and the window's time (attribution.hpp).
     std::string evidence;
 };

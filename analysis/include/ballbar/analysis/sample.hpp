@@ -11,7 +11,7 @@ namespace ballbar::analysis {
 enum SampleFlags : std::uint16_t {
     kSampleOutOfRange = 1u << 0,     ///< the transducer is beyond its ±1 mm range; the value is clamped
     kSampleNotReferenced = 1u << 1,  ///< no reference (zero) has been set since power-on
-    kSampleTempInvalid = 1u << 2,    ///< the bar temperature sensor failed
+    kSampleTempInvalid = 1u << 2,    ///< no bar temperature: the sensor failed, or there is none (a gauge)
     /// Host-only (never sent by the instrument): the first sample after frames were lost. The driver
     /// sets it so a consumer never averages across a gap without knowing.
     kSampleAfterGap = 1u << 8,
