@@ -40,7 +40,8 @@ struct Summary {
     void add(const ballbar::analysis::BarSample& s, double length_mm) {
         if (n == 0) first_us = s.device_time_us;
         last_us = s.device_time_us;
-        temp_C = (s.flags & ballbar::analysis::kSampleTempInvalid) ? std::nullopt : std::optional<double>(s.bar_temp_C);
+        temp_C =
+            (s.flags & ballbar::analysis::kSampleTempInvalid) ? std::nullopt : std::optional<double>(s.temperature_C());
         ++n;
         const double d = length_mm - mean;
         mean += d / static_cast<double>(n);

@@ -87,7 +87,10 @@ void DwellDetector::compute(WindowStats& out) const {
     out.last_seq = last_seq_;
     out.first_time_us = first_time_;
     out.last_time_us = last_time_;
-    out.bar_temp_C = temp_n_ > 0 ? std::optional<double>(temp_sum_ / static_cast<double>(temp_n_)) : std::nullopt;
+    // The mean to 0.1 mK: a tenth of the samples' resolution, no float noise.
+    out.bar_temp_C = temp_n_ > 0
+                         ? std::optional<double>(analysis::decimal_round(temp_sum_ / static_cast<double>(temp_n_), 4))
+                         : std::nullopt;
     out.flagged = flagged_;
 }
 
@@ -104,7 +107,7 @@ DwellDetector::Result DwellDetector::push(const BarSample& s) {
     if (mode_ == Mode::Capturing) {
         add(x, s);
         if (!(s.flags & analysis::kSampleTempInvalid)) {
-            temp_sum_ += s.bar_temp_C;
+            temp_sum_ += s.temperature_C();
             ++temp_n_;
         }
         if (s.flags & ~analysis::kSampleTempInvalid) flagged_ = true;

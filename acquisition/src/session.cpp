@@ -8,6 +8,7 @@
 
 #include "ballbar/acquisition/bar_check.hpp"
 #include "ballbar/acquisition/compute.hpp"
+#include "ballbar/analysis/rounding.hpp"
 #include "instrument_link.hpp"
 
 namespace ballbar::acquisition {
@@ -473,7 +474,8 @@ void Session::on_captured(const AttributionEvent& ev, std::size_t /*entry*/) {
     cp.first_seq = w.first_seq;
     cp.last_seq = w.last_seq;
     cp.bar_temp_C = w.bar_temp_C;
-    cp.time_s = 1e-6 * static_cast<double>((w.first_time_us + w.last_time_us) / 2 - first_time_us_.value_or(0));
+    cp.time_s = analysis::decimal_round(
+        1e-6 * static_cast<double>((w.first_time_us + w.last_time_us) / 2 - first_time_us_.value_or(0)), 6);
     cp.evidence = ev.evidence;
     std::string why;
     if (w.std_mm > cs.max_std_mm)

@@ -4,6 +4,7 @@
 // K_std next to K, an item's unit in `unit` where a list mixes them, absent values null.
 #include <cmath>
 
+#include "ballbar/analysis/rounding.hpp"
 #include "ballbar/analysis/types.hpp"
 #include "ballbar/report/report.hpp"
 
@@ -191,6 +192,10 @@ nlohmann::json to_json(const Report& r) {
     for (const auto& o : r.orientation) {
         json e{{"angle", o.symbol == "Δα" ? "d_alpha" : o.symbol == "Δβ" ? "d_beta" : "d_gamma"}, {"axis", o.axis}};
         put_angle(e, "commanded", o.commanded_rad);
+        if (o.commanded_rad && std::isfinite(*o.commanded_rad)) {  // as the plan gave it: 30, not 29.999999999999996
+            e["commanded_deg"] = analysis::decimal_round(analysis::rad_to_deg(*o.commanded_rad), 9);
+            e["commanded_arcsec"] = analysis::decimal_round(analysis::rad_to_arcsec(*o.commanded_rad), 6);
+        }
         put_angle(e, "first_order", o.first_order_rad);
         put_angle(e, "exact", o.exact_rad);
         put_angle(e, "exact", o.uncertainty_rad, "_std");

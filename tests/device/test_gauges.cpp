@@ -216,7 +216,7 @@ TEST_P(GaugeEmulators, SamplerZeroesSignsAndMeasuresTheRate) {
     disp = 0.0123;  // the bar grows by 12.3 µm; the gauge, mounted reversed, reads less
     s = sampler.poll(500ms);
     ASSERT_TRUE(s);
-    EXPECT_EQ(s->flags, 0);
+    EXPECT_EQ(s->flags, analysis::kSampleTempInvalid);  // referenced; a gauge has no bar temperature
     EXPECT_NEAR(s->length_mm(150), 150.0123, 1e-7);
     EXPECT_NEAR(sampler.stats().rate_hz, 25, 0.01);
     EXPECT_NEAR(sampler.stats().resolution_mm, 1e-4, 1e-12);

@@ -13,6 +13,7 @@
 
 #include "../circular.hpp"
 #include "ballbar/analysis/circular.hpp"
+#include "ballbar/analysis/rounding.hpp"
 #include "ballbar/report/decimate.hpp"
 #include "ballbar/report/results.hpp"
 #include "ballbar/storage/circular_result.hpp"
@@ -34,7 +35,7 @@ void add_temperature(Range& r, double v, double& sum, std::size_t& n) {
     r.max = std::max(r.max.value_or(v), v);
     sum += v;
     ++n;
-    r.mean = sum / static_cast<double>(n);
+    r.mean = analysis::decimal_round(sum / static_cast<double>(n), 4);  // 0.1 mK: no float noise
 }
 
 std::string procedure_kind(const storage::Transition& t) {
@@ -85,7 +86,7 @@ void add_circular_test(Report& r, storage::Store& store, std::int64_t session_id
             if (x && std::isfinite(*x))
                 out.min = std::min(out.min.value_or(*x), *x), out.max = std::max(out.max.value_or(*x), *x), sum += *x,
                 ++n;
-        if (n > 0) out.mean = sum / static_cast<double>(n);
+        if (n > 0) out.mean = analysis::decimal_round(sum / static_cast<double>(n), 4);  // 0.1 mK
         return out;
     };
     c.bar_temp_C = range(trace.bar_temp_C);
@@ -154,13 +155,14 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
                 lo = std::min(lo, um);
                 hi = std::max(hi, um);
                 if (!(s.flags & analysis::kSampleTempInvalid))
-                    add_temperature(h.bar_temp_C, s.bar_temp_C, sum_bar, n_bar);
+                    add_temperature(h.bar_temp_C, s.temperature_C(), sum_bar, n_bar);
                 while (next_wanted < wanted.size() && wanted[next_wanted] < s.seq) ++next_wanted;
                 if (next_wanted < wanted.size() && wanted[next_wanted] == s.seq) wanted_time[next_wanted++] = t;
             });
             r.trace.samples = dec.seen();
             XYSeries kept = dec.take();
             r.trace.time_s = std::move(kept.x);
+            for (double& t : r.trace.time_s) t = analysis::decimal_round(t, 6);  // the instrument's µs clock
             r.trace.displacement_um = std::move(kept.y);
             if (r.trace.samples > 0) r.trace.min_um = lo, r.trace.max_um = hi;
         }
@@ -184,8 +186,8 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
         c.point = rd.point;
         c.mean_um = (rd.measured_mm - p.nominal_mm) * 1000.0;
         if (p.first_seq && p.last_seq) {
-            c.start_s = time_of(*p.first_seq);
-            c.end_s = time_of(*p.last_seq);
+            c.start_s = analysis::decimal_round(time_of(*p.first_seq), 6);
+            c.end_s = analysis::decimal_round(time_of(*p.last_seq), 6);
         }
         if (!std::isfinite(c.start_s) || !std::isfinite(c.end_s)) {  // imported readings: no samples behind them
             const double half = rd.n > 0 ? rd.n * 5e-4 : 0.25;
@@ -200,7 +202,8 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
         ProcedureEvent e;
         e.timestamp = t.at;
         const double wall = parse_iso8601(t.at);
-        e.time_s = std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0;
+        e.time_s = std::isfinite(wall) && std::isfinite(t0_wall) ? analysis::decimal_round(wall - t0_wall, 3)
+                                                                 : 0;  // ms stamps
         e.kind = procedure_kind(t);
         e.step = std::string(storage::to_string(t.to));
         e.detail = t.event;
@@ -211,9 +214,13 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
     for (const auto& step : store.procedure_steps(session_id)) {
         const double wall = parse_iso8601(step.at);
         const nlohmann::json payload = {
-            {"from", step.from},   {"to", step.to},
-            {"event", step.event}, {"detail", step.detail},
-            {"at", step.at},       {"time_s", std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0}};
+            {"from", step.from},
+            {"to", step.to},
+            {"event", step.event},
+            {"detail", step.detail},
+            {"at", step.at},
+            {"time_s",
+             std::isfinite(wall) && std::isfinite(t0_wall) ? analysis::decimal_round(wall - t0_wall, 3) : 0.0}};
         add_result(r, "acquisition.transition", payload);
     }
     std::optional<storage::ResultRecord> circular_result;
@@ -229,7 +236,8 @@ Report build_report(storage::Store& store, std::int64_t session_id, const BuildO
         if (res.kind == "acquisition.transition" && payload.is_object()) {  // a v1 file read as it is
             payload["at"] = res.created_at;
             const double wall = parse_iso8601(res.created_at);
-            payload["time_s"] = std::isfinite(wall) && std::isfinite(t0_wall) ? wall - t0_wall : 0.0;
+            payload["time_s"] =
+                std::isfinite(wall) && std::isfinite(t0_wall) ? analysis::decimal_round(wall - t0_wall, 3) : 0.0;
         }
         try {
             add_result(r, res.kind, payload);

@@ -5,6 +5,8 @@
 
 #include <cstdint>
 
+#include "ballbar/analysis/rounding.hpp"
+
 namespace ballbar::analysis {
 
 /// Flags of a sample (bit values are the protocol's, docs/protocol.md).
@@ -23,6 +25,9 @@ struct BarSample {
     std::int32_t displacement_nm = 0;  ///< transducer displacement from the calibrated length
     std::uint16_t flags = 0;
     float bar_temp_C = 20.0f;
+
+    /// The bar temperature as stored and sent: whole milli-kelvin (20.3, not the float's 20.299999237060547).
+    double temperature_C() const { return decimal_round(static_cast<double>(bar_temp_C), 3); }
 
     /// Bar length (ball centre to ball centre) for a bar calibrated at `calibrated_length_mm`.
     double length_mm(double calibrated_length_mm) const { return calibrated_length_mm + displacement_nm * 1e-6; }
