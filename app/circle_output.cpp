@@ -37,14 +37,15 @@ void print_circle_result(std::ostream& os, const circ::CircularResult& r, const 
     os << '\n';
     for (std::size_t k = 0; k < r.runs.size(); ++k)
         os << "  run " << k + 1 << " " << circ::direction_name(r.runs[k].direction) << ": G "
-           << fmt(r.runs[k].circularity_um) << " um  (data from " << fmt(r.runs[k].data_start_s, 3) << " s to "
+           << fmt(r.runs[k].circularity_um) << " µm  (data from " << fmt(r.runs[k].data_start_s, 3) << " s to "
            << fmt(r.runs[k].data_end_s, 3) << " s)\n";
-    if (r.bidirectional_um) os << "  G(b) " << fmt(*r.bidirectional_um) << " um\n";
-    os << "  F max " << fmt(r.radial_max_um) << " um, min " << fmt(r.radial_min_um) << " um\n";
+    if (r.bidirectional_um) os << "  G(b) " << fmt(*r.bidirectional_um) << " µm\n";
+    if (r.hysteresis_um) os << "  H " << fmt(*r.hysteresis_um) << " µm (circular hysteresis)\n";
+    os << "  F max " << fmt(r.radial_max_um) << " µm, min " << fmt(r.radial_min_um) << " µm\n";
     if (tolerance_um) {
         bool pass = true;
         for (const auto& run : r.runs) pass = pass && run.circularity_um <= *tolerance_um;
-        os << "  tolerance G <= " << fmt(*tolerance_um) << " um: " << (pass ? "PASS" : "FAIL") << '\n';
+        os << "  tolerance G ≤ " << fmt(*tolerance_um) << " µm: " << (pass ? "PASS" : "FAIL") << '\n';
     }
     os << "diagnostics, ranked by share of the circular deviation (value ± standard uncertainty):\n";
     std::string missing;
@@ -70,7 +71,7 @@ void print_circle_result(std::ostream& os, const circ::CircularResult& r, const 
                << fmt(g.combined_std, 3);
         os << '\n';
     }
-    os << "residual RMS after the diagnosis: " << fmt(r.residual_rms_um, 3) << " um\n";
+    os << "residual RMS after the diagnosis: " << fmt(r.residual_rms_um, 3) << " µm\n";
 }
 
 ojson volumetric_json(const circ::VolumetricResult& v) {

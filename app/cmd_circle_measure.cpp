@@ -367,6 +367,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
         {"replayed_frames", run.replayed_frames},
         {"runs", ojson::array()},
         {"bidirectional_circularity_um", result.bidirectional_um ? ojson(*result.bidirectional_um) : ojson(nullptr)},
+        {"hysteresis_um", result.hysteresis_um ? ojson(*result.hysteresis_um) : ojson(nullptr)},
         {"diagnostics", diags},
         {"pass", pass}};
     for (const auto& r : result.runs)
@@ -389,6 +390,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
         for (const auto& r : result.runs)
             std::printf("G %s: %.3f µm\n", circ::direction_name(r.direction), r.circularity_um);
         if (result.bidirectional_um) std::printf("G(b): %.3f µm\n", *result.bidirectional_um);
+        if (result.hysteresis_um) std::printf("H: %.3f µm\n", *result.hysteresis_um);
         std::printf("Session %lld stored in %s (%zu samples, %d run%s of the program).\n", static_cast<long long>(id),
                     store.path().c_str(), sum.samples, sum.attempts, sum.attempts == 1 ? "" : "s");
     }

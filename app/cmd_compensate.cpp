@@ -254,9 +254,9 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
         report << '\n';
         if (s.arcs > 0)
             report << s.arcs << " arc(s) as " << s.arc_chords << " chords within " << args.chord_tolerance_mm * 1e3
-                   << " um\n";
+                   << " µm\n";
         if (s.retracts > 0) report << s.retracts << " retract(s) (G91 G28) copied uncompensated\n";
-        report << "largest correction: " << s.max_linear_mm * 1e3 << " um linear (line " << s.max_linear_line << "), "
+        report << "largest correction: " << s.max_linear_mm * 1e3 << " µm linear (line " << s.max_linear_line << "), "
                << ba::rad_to_deg(s.max_rotary_rad) * 3600.0 << " arcsec rotary (line " << s.max_rotary_line << ")\n";
         if (s.singular > 0) {
             report << s.singular << " point(s) within " << args.singular_deg

@@ -55,10 +55,10 @@ void print_table(const ba::DiscoveryResult& r, const ba::ReadingSet& set, const 
     std::printf("base model:");
     for (ba::Param p : r.base_model) std::printf(" %s", std::string(ba::param_info(p).name).c_str());
     std::printf(" + socket offsets\n");
-    std::printf("initial residual RMS %.3f um (best explained by %s)\n\n", r.rms_initial_mm * 1e3,
+    std::printf("initial residual RMS %.3f µm (best explained by %s)\n\n", r.rms_initial_mm * 1e3,
                 std::string(ba::to_string(r.initial_residuals.best, r.type)).c_str());
     if (r.noise_floor.known())
-        std::printf("noise floor %.3f um (%s: %s)\n", r.noise_floor.sigma_mm * 1e3, r.noise_floor.source.c_str(),
+        std::printf("noise floor %.3f µm (%s: %s)\n", r.noise_floor.sigma_mm * 1e3, r.noise_floor.source.c_str(),
                     r.noise_floor.detail.c_str());
     else
         std::printf("noise floor unknown (%s)\n", r.noise_floor.detail.c_str());
@@ -69,7 +69,7 @@ void print_table(const ba::DiscoveryResult& r, const ba::ReadingSet& set, const 
                     "unit", "RMS before -> after", "F", "explained by");
         int i = 1;
         for (const ba::DiscoveryStep& st : r.steps)
-            std::printf("%-4d %-24s %-5s %14s %10s %-6s %9.3f -> %6.3f um %10.1f  %s%s\n", i++,
+            std::printf("%-4d %-24s %-5s %14s %10s %-6s %9.3f → %6.3f µm %10.1f  %s%s\n", i++,
                         std::string(st.effect->id).c_str(), std::string(st.effect->iso).c_str(),
                         format_value(st.estimate).c_str(), format_value(st.std_error).c_str(),
                         std::string(ba::to_string(st.effect->unit())).c_str(), st.rms_before_mm * 1e3,
@@ -79,19 +79,19 @@ void print_table(const ba::DiscoveryResult& r, const ba::ReadingSet& set, const 
     auto verdict_line = [](const char* when, const ba::NoiseVerdict& v) {
         if (!v.floor_known) {
             std::printf(
-                "%s: residual RMS %.3f um; the noise floor is unknown, so whether it is noise cannot be "
+                "%s: residual RMS %.3f µm; the noise floor is unknown, so whether it is noise cannot be "
                 "decided (give --noise-um)\n",
                 when, v.rms_mm * 1e3);
             return;
         }
-        std::printf("%s: residual RMS %.3f um = %.2fx the noise floor: %s (chi-square %.1f on %.0f dof, p = %.3g%s)\n",
+        std::printf("%s: residual RMS %.3f µm = %.2fx the noise floor: %s (chi-square %.1f on %.0f dof, p = %.3g%s)\n",
                     when, v.rms_mm * 1e3, v.ratio, v.structure ? "UNEXPLAINED STRUCTURE" : "consistent with noise",
                     v.chi2, v.dof, v.p_value, v.structure ? ", below the threshold" : "");
     };
     verdict_line("\nbefore the search beyond the library", r.verdict_library);
     for (const ba::EmpiricalStep& st : r.learned) {
         std::printf("\nbeyond the library: %s\n", st.description.c_str());
-        std::printf("  found in %s (family %s): F = %.1f on (%.0f, %.0f) dof, p = %.3g < %.3g; RMS %.3f -> %.3f um\n",
+        std::printf("  found in %s (family %s): F = %.1f on (%.0f, %.0f) dof, p = %.3g < %.3g; RMS %.3f -> %.3f µm\n",
                     st.variable.c_str(), st.family.c_str(), st.f, st.dof1, st.dof2, st.p_value, st.threshold_p,
                     st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
         for (const ba::LearnedTerm& t : st.terms)
@@ -102,7 +102,7 @@ void print_table(const ba::DiscoveryResult& r, const ba::ReadingSet& set, const 
     }
     if (!r.unlocated.empty()) std::printf("\nunexplained structure not located: %s\n", r.unlocated.c_str());
     verdict_line("\nfinal", r.verdict);
-    std::printf("final residual RMS %.3f um\n", r.rms_final_mm * 1e3);
+    std::printf("final residual RMS %.3f µm\n", r.rms_final_mm * 1e3);
     for (const auto& g : r.confounded) {
         std::printf("confounded (the readings cannot tell these apart):");
         for (const auto& n : g) std::printf(" %s", n.c_str());

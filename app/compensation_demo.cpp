@@ -16,7 +16,7 @@ std::string compensation_demo_text(const workflow::CompensationDemo& demo, doubl
     std::ostringstream out;
     out << "Emulated TTTRR machine, seed-like errors (rotary block dominant)\n"
         << "Plan: " << demo.locations << " SSM locations, " << demo.readings << " readings, bar noise " << noise_um
-        << " um\n";
+        << " µm\n";
     for (const auto& s : demo.not_identifiable) out << "  not identifiable: " << s << '\n';
     out << "Identification: " << fit_report(demo.fit);
     out << "Identified vs true (identifiable: what this plan can see of the truth, EZZ held at 0;\n"
@@ -36,8 +36,8 @@ std::string compensation_demo_text(const workflow::CompensationDemo& demo, doubl
         << " compensation\n";
     for (int a = 0; a < 3; ++a)
         out << "  "
-            << "XYZ"[a] << ": RMS error " << demo.rms_before_um[a] << " um -> " << demo.rms_after_um[a]
-            << " um, improvement " << demo.improvement(a) << "x\n";
+            << "XYZ"[a] << ": RMS error " << demo.rms_before_um[a] << " µm → " << demo.rms_after_um[a]
+            << " µm, improvement " << demo.improvement(a) << "x\n";
     return out.str();
 }
 

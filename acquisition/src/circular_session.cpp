@@ -401,6 +401,8 @@ CircularSummary CircularSession::run() {
                 review << " " << circ::direction_name(r.direction) << " " << fixed_text(r.circularity_um, 2) << " µm";
             if (summary_.result->bidirectional_um)
                 review << ", G(b) " << fixed_text(*summary_.result->bidirectional_um, 2) << " µm";
+            if (summary_.result->hysteresis_um)
+                review << ", H " << fixed_text(*summary_.result->hysteresis_um, 2) << " µm";
             review << ". Accept the test?";
             fire(Event::ResultsReady, review.str());
             if (op_.confirm("review", review.str())) {

@@ -3,6 +3,7 @@
 // (G per run, G(b), F) and the diagnosis (circular_fit.cpp).
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 
@@ -23,9 +24,9 @@ struct AnglePoint {
     double y_um, c, s;
 };
 
-/// Max − min radial deviation about the least-squares centre of the points [begin, end).
-double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
-    if (end - begin < 3) return 0.0;
+/// The least-squares circle of the points [begin, end) (at least 3): mean radial deviation and the
+/// centre's offset, as the coefficients of 1, cos θ and sin θ.
+Eigen::Vector3d least_squares_circle(const AnglePoint* begin, const AnglePoint* end) {
     Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
     for (const AnglePoint* p = begin; p != end; ++p) {
@@ -33,7 +34,13 @@ double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
         a += row * row.transpose();
         b += row * p->y_um;
     }
-    const Eigen::Vector3d c = a.ldlt().solve(b);
+    return a.ldlt().solve(b);
+}
+
+/// Max − min radial deviation about the least-squares centre of the points [begin, end).
+double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
+    if (end - begin < 3) return 0.0;
+    const Eigen::Vector3d c = least_squares_circle(begin, end);
     double lo = 0.0, hi = 0.0;
     bool first = true;
     for (const AnglePoint* p = begin; p != end; ++p) {
@@ -42,6 +49,34 @@ double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
         first = false;
     }
     return hi - lo;
+}
+
+/// ISO 230-4's circular hysteresis H: the largest radial difference between the clockwise and the
+/// counter-clockwise path, both about the least-squares centre of the two together (G(b)'s). The paths
+/// are compared in 1° sectors of the angle (each sector's mean deviation, a hundred samples or so at
+/// the usual feeds and rates, so the noise of single samples does not pass for hysteresis), over the
+/// sectors both runs cover.
+double circular_hysteresis(const AnglePoint* a_begin, const AnglePoint* a_end, const AnglePoint* b_begin,
+                           const AnglePoint* b_end, const Eigen::Vector3d& centre) {
+    constexpr int kSectors = 360;
+    std::array<double, kSectors> sum_a{}, sum_b{};
+    std::array<int, kSectors> n_a{}, n_b{};
+    auto bin = [&](const AnglePoint* begin, const AnglePoint* end, std::array<double, kSectors>& sum,
+                   std::array<int, kSectors>& n) {
+        for (const AnglePoint* p = begin; p != end; ++p) {
+            double deg = std::atan2(p->s, p->c) / kDeg;
+            if (deg < 0) deg += 360.0;
+            const auto k = std::min(kSectors - 1, static_cast<int>(deg));
+            sum[static_cast<std::size_t>(k)] += p->y_um - (centre[0] + centre[1] * p->c + centre[2] * p->s);
+            ++n[static_cast<std::size_t>(k)];
+        }
+    };
+    bin(a_begin, a_end, sum_a, n_a);
+    bin(b_begin, b_end, sum_b, n_b);
+    double h = 0.0;
+    for (std::size_t k = 0; k < kSectors; ++k)
+        if (n_a[k] > 0 && n_b[k] > 0) h = std::max(h, std::abs(sum_a[k] / n_a[k] - sum_b[k] / n_b[k]));
+    return h;
 }
 
 /// Throws when the samples from `from_s` (the feed-in's start) to `to_s` (the data arc's end) have a
@@ -204,7 +239,20 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
     }
     for (std::size_t k = 0; k < result.runs.size(); ++k)
         result.runs[k].circularity_um = circular_deviation(all.data() + run_begin[k], all.data() + run_begin[k + 1]);
-    if (in.both_directions) result.bidirectional_um = circular_deviation(all.data(), all.data() + all.size());
+    if (in.both_directions) {
+        result.bidirectional_um = circular_deviation(all.data(), all.data() + all.size());
+        // H between the first run of each direction.
+        const std::size_t none = result.runs.size();
+        std::size_t run_ccw = none, run_cw = none;
+        for (std::size_t k = 0; k < result.runs.size(); ++k) {
+            if (result.runs[k].direction == Direction::Ccw && run_ccw == none) run_ccw = k;
+            if (result.runs[k].direction == Direction::Cw && run_cw == none) run_cw = k;
+        }
+        if (run_ccw != none && run_cw != none)
+            result.hysteresis_um = circular_hysteresis(
+                all.data() + run_begin[run_ccw], all.data() + run_begin[run_ccw + 1], all.data() + run_begin[run_cw],
+                all.data() + run_begin[run_cw + 1], least_squares_circle(all.data(), all.data() + all.size()));
+    }
     result.radial_max_um = result.runs.front().radial_max_um;
     result.radial_min_um = result.runs.front().radial_min_um;
     for (const auto& r : result.runs) {

@@ -95,6 +95,7 @@ void add_circular(Report& report, std::string_view, const json& p) {
         c.runs.push_back(std::move(r));
     }
     c.bidirectional_um = rec.bidirectional_um;
+    c.hysteresis_um = rec.hysteresis_um;
     c.radial_max_um = rec.radial_max_um.value_or(0);
     c.radial_min_um = rec.radial_min_um.value_or(0);
     // Diagnostics: the ranked ones in their order, each followed by its pitch or frequency, then the rest.

@@ -89,6 +89,9 @@ void figures(Document& doc, const CircularTest& c) {
     if (c.bidirectional_um)
         rows.push_back({"G(b), bidirectional", fixed(*c.bidirectional_um, 2), tol ? "≤ " + fixed(*tol, 2) : "–",
                         judged(*c.bidirectional_um), "one least-squares centre for both runs"});
+    if (c.hysteresis_um)
+        rows.push_back({"H, circular hysteresis", fixed(*c.hysteresis_um, 2), "", "",
+                        "largest gap between the two directions' paths (1° sectors)"});
     rows.push_back({"F max (radial deviation)", fixed(c.radial_max_um, 2), "", "", "measured − programmed radius"});
     rows.push_back({"F min (radial deviation)", fixed(c.radial_min_um, 2), "", "", "over every data arc"});
     rows.push_back(

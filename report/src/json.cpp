@@ -141,6 +141,7 @@ json circular(const Report& r) {
               {"instrument", instrument}}},
             {"runs", runs},
             {"bidirectional_circularity_um", opt(c.bidirectional_um)},
+            {"hysteresis_um", opt(c.hysteresis_um)},
             {"radial_deviation_um", {{"max", num(c.radial_max_um)}, {"min", num(c.radial_min_um)}}},
             {"tolerance", tolerance},
             {"diagnostics", diags},

@@ -31,6 +31,7 @@ std::string circular_result_json(const circ::CircularResult& r, const TraceFile&
                         {"samples", run.last_sample - run.first_sample}});
     j["runs"] = runs;
     j["bidirectional_circularity_um"] = r.bidirectional_um ? ojson(*r.bidirectional_um) : ojson(nullptr);
+    j["hysteresis_um"] = r.hysteresis_um ? ojson(*r.hysteresis_um) : ojson(nullptr);
     j["radial_deviation_um"] = {{"max", r.radial_max_um}, {"min", r.radial_min_um}};
     // docs/cli.md's vocabulary: the detected diagnostics one list, ranked first by their share of the
     // circular deviation; each with its unit, value and standard uncertainty.
@@ -160,6 +161,7 @@ CircularRecord read_circular(const json& p) {
         c.runs.push_back(std::move(r));
     }
     c.bidirectional_um = opt_num(p, "bidirectional_circularity_um");
+    c.hysteresis_um = opt_num(p, "hysteresis_um");  // absent in results stored before it was computed
     if (const json* f = find(p, "radial_deviation_um")) {
         c.radial_max_um = num(*f, "max", "radial_deviation_um.");
         c.radial_min_um = num(*f, "min", "radial_deviation_um.");

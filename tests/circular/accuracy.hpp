@@ -131,6 +131,14 @@ inline std::vector<Check> judge(const GenCase& c, const GenTrace& truth, const c
     gb.truth = truth.gb_um, gb.estimate = r.bidirectional_um.value_or(NAN);
     gb.error = std::abs(gb.estimate - gb.truth), gb.tolerance = 0.5, gb.pass = gb.error <= 0.5;
     out.push_back(gb);
+    if (truth.h_um >= 0) {
+        Check h;
+        h.name = "H";
+        h.injected = true;
+        h.truth = truth.h_um, h.estimate = r.hysteresis_um.value_or(NAN);
+        h.error = std::abs(h.estimate - h.truth), h.tolerance = 0.5, h.pass = h.error <= 0.5;
+        out.push_back(h);
+    }
     return out;
 }
 

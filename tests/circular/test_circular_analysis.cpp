@@ -223,3 +223,36 @@ TEST(CircularAnalysis, VolumetricCombinesThreePlanes) {
 }
 
 }  // namespace
+
+namespace {
+
+// ISO 230-4's hysteresis H: backlash of one axis puts the two directions' paths apart by the backlash
+// where that axis moves along the radius (H ≈ the backlash); squareness and scale bend both paths alike
+// (H at the noise of 1° sectors).
+TEST(CircularAnalysis, HysteresisIsTheBacklashBetweenTheDirectionsAndNothingForDirectionFreeErrors) {
+    std::mt19937_64 rng(11);
+    const GenSpec s = base_spec(0, false);
+    GenEffects backlash;
+    backlash.backlash_um = {5.0, 0.0};
+    const GenTrace g = generate(s, backlash, rng);
+    const auto r = circ::analyze_circular(to_test(s), to_samples(g));
+    ASSERT_TRUE(r.hysteresis_um.has_value());
+    EXPECT_NEAR(*r.hysteresis_um, g.h_um, 0.5);
+    EXPECT_NEAR(*r.hysteresis_um, 5.0, 0.6);
+
+    GenEffects alike;
+    alike.squareness_um_per_m = 40.0;
+    alike.scale_ppm = {30.0, -20.0};
+    const GenTrace g2 = generate(s, alike, rng);
+    const auto r2 = circ::analyze_circular(to_test(s), to_samples(g2));
+    ASSERT_TRUE(r2.hysteresis_um.has_value());
+    EXPECT_LT(*r2.hysteresis_um, 0.5);
+    EXPECT_NEAR(*r2.hysteresis_um, g2.h_um, 0.3);
+
+    GenSpec one = s;
+    one.runs.resize(1);
+    const GenTrace g3 = generate(one, backlash, rng);
+    EXPECT_FALSE(circ::analyze_circular(to_test(one), to_samples(g3)).hysteresis_um.has_value());
+}
+
+}  // namespace

@@ -20,8 +20,8 @@ struct Segment {
     int run = -1;
 };
 
-/// Kasa's algebraic circle fit, then max − min distance to its centre (µm).
-double circle_g(const std::vector<std::array<double, 2>>& pts) {
+/// Kasa's algebraic circle fit: the centre.
+std::array<double, 2> kasa_centre(const std::vector<std::array<double, 2>>& pts) {
     double mx = 0, my = 0;
     for (const auto& p : pts) mx += p[0], my += p[1];
     mx /= static_cast<double>(pts.size()), my /= static_cast<double>(pts.size());
@@ -44,7 +44,12 @@ double circle_g(const std::vector<std::array<double, 2>>& pts) {
             for (int j = 0; j < 3; ++j) m[i][j] = j == c ? b[i] : a[i][j];
         sol[c] = det3(m) / d;
     }
-    const double cx = -sol[0] / 2.0 + mx, cy = -sol[1] / 2.0 + my;
+    return {-sol[0] / 2.0 + mx, -sol[1] / 2.0 + my};
+}
+
+/// Max − min distance to the Kasa centre (µm).
+double circle_g(const std::vector<std::array<double, 2>>& pts) {
+    const auto [cx, cy] = kasa_centre(pts);
     double lo = 1e300, hi = -1e300;
     for (const auto& p : pts) {
         const double r = std::hypot(p[0] - cx, p[1] - cy);
@@ -178,6 +183,32 @@ GenTrace generate(const GenSpec& spec, const GenEffects& fx, std::mt19937_64& rn
     }
     for (const auto& pts : run_pts) out.g_um.push_back(circle_g(pts));
     out.gb_um = circle_g(all_pts);
+    // H: the two directions' distances to the common centre, compared degree by degree (each degree's
+    // mean), as ISO 230-4 compares the two paths.
+    std::size_t ccw = spec.runs.size(), cw = spec.runs.size();
+    for (std::size_t k = 0; k < spec.runs.size(); ++k) {
+        if (spec.runs[k].ccw && ccw == spec.runs.size()) ccw = k;
+        if (!spec.runs[k].ccw && cw == spec.runs.size()) cw = k;
+    }
+    if (ccw < spec.runs.size() && cw < spec.runs.size()) {
+        const auto c = kasa_centre(all_pts);
+        auto sectors = [&](const std::vector<std::array<double, 2>>& pts) {
+            std::vector<double> sum(360, 0.0), n(360, 0.0);
+            for (const auto& p : pts) {
+                double deg = std::atan2(p[1] - c[1], p[0] - c[0]) * 180.0 / kPi;
+                if (deg < 0) deg += 360.0;
+                const auto k = std::min<std::size_t>(359, static_cast<std::size_t>(deg));
+                sum[k] += std::hypot(p[0] - c[0], p[1] - c[1]);
+                n[k] += 1;
+            }
+            for (std::size_t k = 0; k < 360; ++k) sum[k] = n[k] > 0 ? sum[k] / n[k] : std::nan("");
+            return sum;
+        };
+        const auto a = sectors(run_pts[ccw]), b = sectors(run_pts[cw]);
+        out.h_um = 0;
+        for (std::size_t k = 0; k < 360; ++k)
+            if (!std::isnan(a[k]) && !std::isnan(b[k])) out.h_um = std::max(out.h_um, std::abs(a[k] - b[k]) * 1e3);
+    }
     out.f_max_um = fmax, out.f_min_um = fmin;
     return out;
 }

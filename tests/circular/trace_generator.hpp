@@ -50,6 +50,7 @@ struct GenTrace {
     std::vector<double> time_s, measured_mm;
     std::vector<double> g_um;  ///< true G of each run
     double gb_um = 0.0;        ///< true G(b) over all runs
+    double h_um = -1.0;        ///< true H between the first run of each direction; −1: one direction only
     double f_max_um = 0.0, f_min_um = 0.0;
 };
 

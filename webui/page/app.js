@@ -485,6 +485,7 @@ async function loadSession(id) {
   if (c) {
     const rows = c.runs.map((r) => ['G ' + r.direction, fmt(r.circularity_um, 2) + ' µm' + (r.pass === null ? '' : r.pass ? '  PASS' : '  FAIL')]);
     rows.push(['G(b) both directions', fmt(c.bidirectional_circularity_um, 2) + ' µm']);
+    if (c.hysteresis_um !== null && c.hysteresis_um !== undefined) rows.push(['H hysteresis', fmt(c.hysteresis_um, 2) + ' µm']);
     rows.push(['tolerance', c.tolerance ? fmt(c.tolerance.circularity_um, 1) + ' µm (' + c.tolerance.source + ')' : 'none set']);
     rows.push(['plane, radius, feed', c.conditions.plane + ', ' + c.conditions.radius_mm + ' mm, ' + c.conditions.feed_mm_min + ' mm/min']);
     kv($('circular-figures'), rows);

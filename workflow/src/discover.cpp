@@ -38,7 +38,7 @@ storage::ModelRecord store_result(storage::Store& store, const ReadingInputs& in
     for (const ba::DiscoveryStep& st : r.steps) {
         model.push_back(st.effect->param);
         char note[200];
-        std::snprintf(note, sizeof note, "discovery: added %s%s%s, RMS %.3f -> %.3f um",
+        std::snprintf(note, sizeof note, "discovery: added %s%s%s, RMS %.3f -> %.3f µm",
                       std::string(st.effect->id).c_str(), st.effect->iso.empty() ? "" : " ",
                       std::string(st.effect->iso).c_str(), st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
         rec = store.save_model(name, stored_model(machine, model, st.model_after, {}, std::string(st.effect->id)),
@@ -48,7 +48,7 @@ storage::ModelRecord store_result(storage::Store& store, const ReadingInputs& in
     for (const ba::EmpiricalStep& st : r.learned) {
         learned.insert(learned.end(), st.terms.begin(), st.terms.end());
         char note[300];
-        std::snprintf(note, sizeof note, "discovery: learned %s (%s), RMS %.3f -> %.3f um", st.family.c_str(),
+        std::snprintf(note, sizeof note, "discovery: learned %s (%s), RMS %.3f -> %.3f µm", st.family.c_str(),
                       st.description.c_str(), st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
         rec = store.save_model(name, stored_model(machine, r.final_model, r.final_fit.model, learned, st.family),
                                in.sessions, rec.id, note);

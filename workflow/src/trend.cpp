@@ -27,6 +27,7 @@ void circular_figures(const storage::CircularRecord& r, TrendPoint& p) {
     for (const auto& run : r.runs) g = std::max(g, run.circularity_um);
     if (!r.runs.empty()) p.figures["G_um"] = g;
     if (r.bidirectional_um) p.figures["G_b_um"] = *r.bidirectional_um;
+    if (r.hysteresis_um) p.figures["H_um"] = *r.hysteresis_um;
     for (const auto& d : r.diagnostics)
         if (d.key == "backlash_x_um" || d.key == "backlash_y_um" || d.key == "backlash_z_um" ||
             d.key == "squareness_um_per_m")

@@ -129,7 +129,10 @@ struct CircularResult {
     TestSpec test;
     std::vector<RunResult> runs;
     std::optional<double> bidirectional_um;  ///< G(b): both directions present
-    double radial_max_um = 0.0;              ///< F: max and min over every data arc
+    /// H, circular hysteresis (ISO 230-4): the largest radial difference between the clockwise and the
+    /// counter-clockwise path, compared in 1° sectors about G(b)'s centre; both directions present.
+    std::optional<double> hysteresis_um;
+    double radial_max_um = 0.0;  ///< F: max and min over every data arc
     double radial_min_um = 0.0;
     std::vector<DiagnosticResult> diagnostics;  ///< separable ones, ranked by share (largest first)
     std::vector<UnseparableGroup> unseparable;

@@ -180,6 +180,7 @@ struct CircularTest {
     std::optional<double> sample_rate_hz, samples_used;
     std::vector<CircularRun> runs;
     std::optional<double> bidirectional_um;  ///< G(b)
+    std::optional<double> hysteresis_um;     ///< H, circular hysteresis (ISO 230-4)
     double radial_max_um = 0, radial_min_um = 0;
     std::vector<CircularDiagnostic> diagnostics;  ///< ranked first (by share), then the others
     std::vector<std::string> not_detected;

@@ -16,7 +16,7 @@
 namespace ballbar::storage {
 
 /// The result as one JSON object (text), in docs/cli.md's vocabulary: test, runs[] (direction,
-/// circularity_um, radial_deviation_um, feed-in and data-arc times), bidirectional_circularity_um,
+/// circularity_um, radial_deviation_um, feed-in and data-arc times), bidirectional_circularity_um, hysteresis_um,
 /// radial_deviation_um, diagnostics[] ({key, unit, value, value_std, share_percent, rank}, ranked first),
 /// not_detected, unseparable groups, residual RMS, mean radius, the test conditions (from the trace:
 /// temperatures, instrument) and the tolerance's verdict on G (null without a tolerance). Results
@@ -57,6 +57,7 @@ struct CircularRecord {
     std::array<double, 3> centre_mm{};
     std::vector<StoredCircularRun> runs;
     std::optional<double> bidirectional_um;  ///< G(b)
+    std::optional<double> hysteresis_um;     ///< H (ISO 230-4); empty: one direction, or stored before H
     std::optional<double> radial_max_um, radial_min_um;
     std::vector<StoredCircularDiagnostic> diagnostics;
     std::vector<std::string> not_detected;
