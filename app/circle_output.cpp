@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "ballbar/report/advice.hpp"
 #include "ballbar/storage/circular_result.hpp"
 #include "ballbar/workflow/circular_test.hpp"
 
@@ -60,6 +61,10 @@ void print_circle_result(std::ostream& os, const circ::CircularResult& r, const 
         os << line;
         if (d.contribution_um > 0.0) os << "  " << fmt(d.share_percent, 1) << " %";
         os << '\n';
+        if (const std::string a =
+                report::diagnostic_action(d.key, d.value, d.std_uncertainty, circ::plane_name(r.test.plane));
+            !a.empty())
+            os << "      → " << a << '\n';
     }
     if (!missing.empty()) os << "not detected: " << missing << '\n';
     for (const auto& g : r.unseparable) {

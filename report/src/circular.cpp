@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "ballbar/report/advice.hpp"
 #include "ballbar/report/decimate.hpp"
 #include "ballbar/storage/circular_result.hpp"
 #include "ballbar/storage/machine_json.hpp"
@@ -127,6 +128,7 @@ void add_circular(Report& report, std::string_view, const json& p) {
         d.share_percent = it->share_percent;
         if (it->rank) d.rank = ++rank;
         name_and_unit(d);
+        if (d.rank > 0) d.action = diagnostic_action(d.key, d.value, d.uncertainty.value_or(0), rec.plane);
         c.diagnostics.push_back(std::move(d));
     }
     c.not_detected = rec.not_detected;

@@ -297,6 +297,13 @@ void diagnostics(Document& doc, const CircularTest& c) {
                    {"unit", 0.6},
                    {"share", 0.7, HAlign::Right}},
                   rows);
+    std::vector<std::string> actions;
+    for (const auto& d : c.diagnostics)
+        if (!d.action.empty()) actions.push_back(std::to_string(d.rank) + ". " + d.action + ".");
+    if (!actions.empty()) {
+        doc.heading("What to do, largest first", 30);
+        for (const auto& a : actions) doc.paragraph(a, 8);
+    }
     if (!c.not_detected.empty()) {
         std::string list;
         for (const auto& k : c.not_detected) list += (list.empty() ? "" : ", ") + k;

@@ -110,7 +110,8 @@ json circular(const Report& r) {
                          {"value", num(d.value)},
                          {"value_std", opt(d.uncertainty)},
                          {"share_percent", opt(d.share_percent)},
-                         {"rank", d.rank > 0 ? json(d.rank) : json(nullptr)}});
+                         {"rank", d.rank > 0 ? json(d.rank) : json(nullptr)},
+                         {"action", text(d.action)}});
     json groups = json::array();
     for (const auto& g : c.unseparable)
         groups.push_back({{"keys", g.keys},

@@ -492,7 +492,7 @@ async function loadSession(id) {
     polar(c);
     $('diagnostics').tBodies[0].replaceChildren(...c.diagnostics.map((d) => {
       const tr = el('tr');
-      [d.rank || '', d.name, fmt(d.value, 3) + ' ' + unit(d.unit), fmt(d.value_std, 3), d.share_percent ? fmt(d.share_percent, 1) + ' %' : ''].forEach((v) => tr.append(el('td', v)));
+      [d.rank || '', d.name, fmt(d.value, 3) + ' ' + unit(d.unit), fmt(d.value_std, 3), d.share_percent ? fmt(d.share_percent, 1) + ' %' : '', d.action || ''].forEach((v) => tr.append(el('td', v)));
       return tr;
     }));
   }

@@ -162,6 +162,7 @@ struct CircularDiagnostic {
     std::optional<double> uncertainty;    ///< standard uncertainty, same unit
     std::optional<double> share_percent;  ///< of the circular deviation (ranked ones)
     int rank = 0;                         ///< 1 = largest share; 0: not ranked (pitch, frequency)
+    std::string action;                   ///< what to do, in the machine's terms (advice.hpp); ranked ones
 };
 
 struct CircularUnseparable {
