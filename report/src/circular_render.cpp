@@ -90,8 +90,8 @@ void figures(Document& doc, const CircularTest& c) {
         rows.push_back({"G(b), bidirectional", fixed(*c.bidirectional_um, 2), tol ? "≤ " + fixed(*tol, 2) : "–",
                         judged(*c.bidirectional_um), "one least-squares centre for both runs"});
     if (c.hysteresis_um)
-        rows.push_back({"H, circular hysteresis", fixed(*c.hysteresis_um, 2), "", "",
-                        "largest gap between the two directions' paths (1° sectors)"});
+        rows.push_back(
+            {"H, circular hysteresis", fixed(*c.hysteresis_um, 2), "", "", "ccw path vs cw path, 1° sectors"});
     rows.push_back({"F max (radial deviation)", fixed(c.radial_max_um, 2), "", "", "measured − programmed radius"});
     rows.push_back({"F min (radial deviation)", fixed(c.radial_min_um, 2), "", "", "over every data arc"});
     rows.push_back(
@@ -198,6 +198,28 @@ void polar_plot(Document& doc, const CircularTest& c) {
                 cairo_line_to(cr, x, y);
         }
         cairo_stroke(cr);
+        // Where the run's data starts (a dot) and which way it goes (an arrowhead an eighth of the way on,
+        // along the path), so the two directions and a reversal's place can be read off the plot.
+        const auto [sx, sy] = at(run.angle_deg.front(), rho(run.deviation_um.front()));
+        cairo_new_path(cr);
+        cairo_arc(cr, sx, sy, 2.6, 0, 2 * std::numbers::pi);
+        cairo_fill(cr);
+        // The arrow follows the chord to a point some 15° on: within an angle column the reduced points
+        // go first/min/max/last, so neighbours can be a radial step apart.
+        const std::size_t n = run.angle_deg.size();
+        const std::size_t i = std::min(n - 2, n / 8), j = std::min(n - 1, i + std::max<std::size_t>(1, n / 24));
+        const auto [ax, ay] = at(run.angle_deg[i], rho(run.deviation_um[i]));
+        const auto [bx, by] = at(run.angle_deg[j], rho(run.deviation_um[j]));
+        const double len = std::hypot(bx - ax, by - ay);
+        if (len > 0) {
+            const double ux = (bx - ax) / len, uy = (by - ay) / len;
+            cairo_new_path(cr);
+            cairo_move_to(cr, ax + 10 * ux, ay + 10 * uy);
+            cairo_line_to(cr, ax - 4.5 * uy, ay + 4.5 * ux);
+            cairo_line_to(cr, ax + 4.5 * uy, ay - 4.5 * ux);
+            cairo_close_path(cr);
+            cairo_fill(cr);
+        }
     }
     // Ring labels along the 75° spoke.
     set_font(cr, 6);
@@ -235,6 +257,9 @@ void polar_plot(Document& doc, const CircularTest& c) {
                   VAlign::Middle);
         y += 12;
     }
+    set_color(cr, kGrey);
+    draw_text(cr, lx, y + 4, "dot: where the data starts; arrowhead: the direction", HAlign::Left, VAlign::Middle);
+    y += 12;
     if (c.tolerance_um) {
         set_color(cr, kPass, 0.3);
         cairo_rectangle(cr, lx, y, 16, 8);
