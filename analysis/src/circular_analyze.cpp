@@ -37,10 +37,8 @@ Eigen::Vector3d least_squares_circle(const AnglePoint* begin, const AnglePoint* 
     return a.ldlt().solve(b);
 }
 
-/// Max − min radial deviation about the least-squares centre of the points [begin, end).
-double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
-    if (end - begin < 3) return 0.0;
-    const Eigen::Vector3d c = least_squares_circle(begin, end);
+/// Max − min radial deviation of the points [begin, end) about the circle `c` (least_squares_circle's).
+double spread_about(const AnglePoint* begin, const AnglePoint* end, const Eigen::Vector3d& c) {
     double lo = 0.0, hi = 0.0;
     bool first = true;
     for (const AnglePoint* p = begin; p != end; ++p) {
@@ -49,6 +47,11 @@ double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
         first = false;
     }
     return hi - lo;
+}
+
+/// Max − min radial deviation about the least-squares centre of the points [begin, end).
+double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
+    return end - begin < 3 ? 0.0 : spread_about(begin, end, least_squares_circle(begin, end));
 }
 
 /// ISO 230-4's circular hysteresis H: the largest radial difference between the clockwise and the
@@ -240,7 +243,8 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
     for (std::size_t k = 0; k < result.runs.size(); ++k)
         result.runs[k].circularity_um = circular_deviation(all.data() + run_begin[k], all.data() + run_begin[k + 1]);
     if (in.both_directions) {
-        result.bidirectional_um = circular_deviation(all.data(), all.data() + all.size());
+        const Eigen::Vector3d both = least_squares_circle(all.data(), all.data() + all.size());  // G(b)'s, and H's
+        result.bidirectional_um = spread_about(all.data(), all.data() + all.size(), both);
         // H between the first run of each direction.
         const std::size_t none = result.runs.size();
         std::size_t run_ccw = none, run_cw = none;
@@ -249,9 +253,9 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
             if (result.runs[k].direction == Direction::Cw && run_cw == none) run_cw = k;
         }
         if (run_ccw != none && run_cw != none)
-            result.hysteresis_um = circular_hysteresis(
-                all.data() + run_begin[run_ccw], all.data() + run_begin[run_ccw + 1], all.data() + run_begin[run_cw],
-                all.data() + run_begin[run_cw + 1], least_squares_circle(all.data(), all.data() + all.size()));
+            result.hysteresis_um =
+                circular_hysteresis(all.data() + run_begin[run_ccw], all.data() + run_begin[run_ccw + 1],
+                                    all.data() + run_begin[run_cw], all.data() + run_begin[run_cw + 1], both);
     }
     result.radial_max_um = result.runs.front().radial_max_um;
     result.radial_min_um = result.runs.front().radial_min_um;

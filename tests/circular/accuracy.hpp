@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -125,20 +126,16 @@ inline std::vector<Check> judge(const GenCase& c, const GenTrace& truth, const c
         g.error = std::abs(g.estimate - g.truth), g.tolerance = 0.5, g.pass = g.error <= 0.5;
         out.push_back(g);
     }
-    Check gb;
-    gb.name = "G(b)";
-    gb.injected = true;
-    gb.truth = truth.gb_um, gb.estimate = r.bidirectional_um.value_or(NAN);
-    gb.error = std::abs(gb.estimate - gb.truth), gb.tolerance = 0.5, gb.pass = gb.error <= 0.5;
-    out.push_back(gb);
-    if (truth.h_um >= 0) {
-        Check h;
-        h.name = "H";
-        h.injected = true;
-        h.truth = truth.h_um, h.estimate = r.hysteresis_um.value_or(NAN);
-        h.error = std::abs(h.estimate - h.truth), h.tolerance = 0.5, h.pass = h.error <= 0.5;
-        out.push_back(h);
-    }
+    auto figure = [&](const char* name, double t, std::optional<double> estimate) {  // within 0.5 µm
+        Check k;
+        k.name = name;
+        k.injected = true;
+        k.truth = t, k.estimate = estimate.value_or(NAN);
+        k.error = std::abs(k.estimate - k.truth), k.tolerance = 0.5, k.pass = k.error <= 0.5;
+        out.push_back(k);
+    };
+    figure("G(b)", truth.gb_um, r.bidirectional_um);
+    if (truth.h_um >= 0) figure("H", truth.h_um, r.hysteresis_um);
     return out;
 }
 
