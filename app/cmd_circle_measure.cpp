@@ -255,7 +255,9 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     mo.operator_name = o.operator_name;
     if (!o.machine_file.empty()) {
         try {
-            mo.machine = acq::parse_machine_file(read_file(o.machine_file, "machine file")).geometry;
+            const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
+            mo.machine = machine.geometry;
+            mo.tolerance_um = machine.tolerances.circularity_um;  // the verdict, stored with the result
         } catch (const acq::PlanError& e) {
             throw Error(ErrorCategory::bad_input, o.machine_file + ": " + e.what());
         }

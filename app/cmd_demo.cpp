@@ -20,6 +20,7 @@
 #include "ballbar/acquisition/session.hpp"
 #include "ballbar/report/build.hpp"
 #include "ballbar/storage/compensation_codec.hpp"
+#include "ballbar/version.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
 #include "ballbar/workflow/ssm_demo.hpp"
 #include "circle_measure.hpp"  // demo --test circular
@@ -50,6 +51,7 @@ struct DemoOptions {
     std::string test = "ssm";  ///< --test circular: the circular test (cmd_circle_measure.cpp)
     std::string plane = "XY";
     double arc_deg = 0;
+    acq::Tolerances tolerances;  ///< --location-tolerance, --angle-tolerance: the SSM's verdict
 };
 
 /// The angles of one orientation entry in arcseconds ("d_alpha -46.66\""): those under `prefix` + name
@@ -108,6 +110,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     workflow::SsmDemoOptions demo;
     demo.machine = *type;
     demo.seed = o.seed;
+    demo.tolerances = o.tolerances;
     demo.notes = "ballbar demo --machine " + o.machine + " --seed " + std::to_string(o.seed);
     if (!o.plan.empty()) {
         try {
@@ -190,6 +193,8 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         put_angles(o_j, "true_first_order_", "", t.result.orientation.first_order, *type, r.kind);
         out["orientation"].push_back(std::move(o_j));
     }
+    const acq::SsmVerdict verdict = acq::judge_ssm(*type, plan.machine.tolerances, sum.tests);
+    out["verdict"] = verdict_json(verdict);
     out["samples"] = sum.samples;
     out["programs"] = sum.programs;
     out["void_dwells"] = sum.void_dwells;
@@ -222,7 +227,9 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         if (*type == ba::MachineType::TTTRR) workflow::store_compensation_demo(store, id, cd, o.seed);
     }
     if (!o.report.empty()) {
-        write_output(o.report, "--report", report::render_pdf_bytes(report::build_report(store, id)), inputs);
+        report::BuildOptions bo;
+        bo.software_version = kVersion;  // "ballbar 0.x.y" on the set-up table, as `ballbar report` writes
+        write_output(o.report, "--report", report::render_pdf_bytes(report::build_report(store, id, bo)), inputs);
         out["report"] = o.report;
     }
     if (o.json) {
@@ -253,6 +260,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         for (const auto& t : out["orientation"])
             std::printf("  test %d (%s): measured %s | true %s\n", t["test"].get<int>(),
                         t["kind"].get<std::string>().c_str(), arcsec(t, "").c_str(), arcsec(t, "true_").c_str());
+        if (verdict.judged()) std::printf("\n%s\n", verdict.summary().c_str());
         std::printf("\nSession %lld stored in %s (%zu samples).\n", static_cast<long long>(id), store.path().c_str(),
                     sum.samples);
         std::printf(
@@ -289,6 +297,12 @@ BALLBAR_COMMAND(demo) {
     sub->add_option("--plane", o->plane, "--test circular: XY, YZ or ZX")->check(CLI::IsMember({"XY", "YZ", "ZX"}));
     sub->add_option("--arc", o->arc_deg, "--test circular: data arc, degrees (default 360 in XY, 180 in YZ and ZX)")
         ->check(in_range(30, 360, "°"));
+    sub->add_option("--location-tolerance", o->tolerances.location_um,
+                    "SSM: |ΔV| allowed at each location, µm: a PASS/FAIL verdict (stored with the session)")
+        ->check(in_range(0, 10000, "µm", true));
+    sub->add_option("--angle-tolerance", o->tolerances.angle_arcsec,
+                    "SSM: |Δα|, |Δβ|, |Δγ| allowed, arcsec: a PASS/FAIL verdict (stored with the session)")
+        ->check(in_range(0, 36000, "arcsec", true));
     sub->callback([o, &globals] { globals.action = [o, &globals] { return run_demo(*o, globals); }; });
 }
 

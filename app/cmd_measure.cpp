@@ -23,6 +23,7 @@
 #include "figures.hpp"
 #include "files.hpp"
 #include "interrupt.hpp"
+#include "json_out.hpp"
 #include "operators.hpp"
 #include "resume_line.hpp"
 
@@ -47,6 +48,9 @@ struct MeasureOptions {
 
 void print_results(std::ostream& out, const acq::Plan& plan, const acq::SessionSummary& sum) {
     const ba::MachineType type = plan.machine.geometry.type;
+    // The verdict first, as the report's summary: the machine file's tolerances (none: no verdict).
+    if (const acq::SsmVerdict v = acq::judge_ssm(type, plan.machine.tolerances, sum.tests); v.judged())
+        out << v.summary() << "\n";
     for (const auto& t : sum.tests) {
         out << "test " << t.test + 1 << " (" << acq::to_string(t.kind) << "):\n  ΔV1 "
             << vec_um(t.dV1_mm, t.dV1_std_mm.norm() > 0 ? &t.dV1_std_mm : nullptr) << "\n  ΔV2 "
@@ -233,8 +237,12 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     }
     if (sum.final_state == acq::State::Done) {
         if (o.json) {
-            nlohmann::json j = {
-                {"event", "done"}, {"session", id}, {"samples", sum.samples}, {"programs", sum.programs}};
+            nlohmann::ordered_json j = {{"event", "done"},
+                                        {"session", id},
+                                        {"samples", sum.samples},
+                                        {"programs", sum.programs},
+                                        {"verdict", verdict_json(acq::judge_ssm(plan.machine.geometry.type,
+                                                                                plan.machine.tolerances, sum.tests))}};
             std::cout << j.dump() << std::endl;
         } else {
             print_results(std::cout, plan, sum);

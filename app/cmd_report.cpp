@@ -24,6 +24,8 @@ struct ReportOptions {
     std::string out;
     bool json = false;
     std::optional<double> tolerance_um;  // circular sessions: the G tolerance
+    // SSM sessions: instead of the machine file's (stored with the session's plan)
+    std::optional<double> location_tolerance_um, angle_tolerance_arcsec;
 };
 
 int run_report(const ReportOptions& o, const Globals& globals) {
@@ -65,6 +67,7 @@ int run_report(const ReportOptions& o, const Globals& globals) {
         throw Error(ErrorCategory::failed, "session " + std::to_string(id) + ": " + e.what());
     }
     if (o.tolerance_um) report::set_circular_tolerance(r, *o.tolerance_um);
+    report::set_ssm_tolerances(r, o.location_tolerance_um, o.angle_tolerance_arcsec);
     if (!o.out.empty()) {
         int pages = 0;
         std::string pdf;
@@ -94,6 +97,12 @@ BALLBAR_COMMAND(report) {
     sub->add_option("--tolerance", opts->tolerance_um,
                     "circular test: G allowed, µm, for the pass/fail verdict (default: the stored result's)")
         ->check(in_range(0, 10000, "µm", true));
+    sub->add_option("--location-tolerance", opts->location_tolerance_um,
+                    "SSM: |ΔV| allowed at each location, µm (default: the machine file's tolerances.location_um)")
+        ->check(in_range(0, 10000, "µm", true));
+    sub->add_option("--angle-tolerance", opts->angle_tolerance_arcsec,
+                    "SSM: |Δα|, |Δβ|, |Δγ| allowed, arcsec (default: the machine file's tolerances.angle_arcsec)")
+        ->check(in_range(0, 36000, "arcsec", true));
     sub->callback([opts, &globals] { globals.action = [opts, &globals] { return run_report(*opts, globals); }; });
 }
 

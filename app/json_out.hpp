@@ -9,6 +9,7 @@
 #include <string>
 
 #include "ballbar/acquisition/plan.hpp"
+#include "ballbar/acquisition/verdict.hpp"
 #include "ballbar/analysis/orientation.hpp"
 #include "ballbar/analysis/types.hpp"
 
@@ -29,5 +30,9 @@ inline nlohmann::ordered_json vec3_json(const analysis::Vec3& v) {
 void put_angles(nlohmann::ordered_json& out, const std::string& prefix, const std::string& suffix,
                 const std::optional<analysis::OrientationErrors>& e, analysis::MachineType type,
                 acquisition::TestKind kind);
+
+/// An SSM verdict (acquisition/verdict.hpp) as {"pass", "checks": [{"test", "figure", "value_um" or
+/// "value_arcsec", "tolerance_um" or "tolerance_arcsec", "pass"}]}; null when nothing was judged.
+nlohmann::ordered_json verdict_json(const acquisition::SsmVerdict& v);
 
 }  // namespace ballbar::app

@@ -28,14 +28,32 @@ std::string travel_key(Axis a) {
     return std::string(axis_name(a)) + (is_rotary(a) ? "_deg" : "_mm");
 }
 
+/// The largest tolerance taken: beyond it a value is a typo (mm for µm), not a shop's limit.
+constexpr double kMaxLocation_um = 10000, kMaxAngle_arcsec = 36000, kMaxCircularity_um = 10000;
+
+Tolerances parse_tolerances(const json& t) {
+    if (!t.is_object()) throw PlanError("machine file: tolerances must be an object");
+    detail::only_keys(t, "machine file: tolerances", {"location_um", "angle_arcsec", "circularity_um"});
+    Tolerances out;
+    auto take = [&](const char* key, double max, const char* unit) -> std::optional<double> {
+        if (!t.contains(key)) return std::nullopt;
+        return detail::require_above("machine file", std::string("tolerances.") + key,
+                                     detail::get_number(t, key, "machine file: tolerances"), 0, max, unit);
+    };
+    out.location_um = take("location_um", kMaxLocation_um, "µm");
+    out.angle_arcsec = take("angle_arcsec", kMaxAngle_arcsec, "arcsec");
+    out.circularity_um = take("circularity_um", kMaxCircularity_um, "µm");
+    return out;
+}
+
 }  // namespace
 
 MachineFile parse_machine_file(std::string_view json_text) {
     const json j = detail::parse_json(json_text, "machine file");
     if (!j.is_object()) throw PlanError("machine file: expected a JSON object");
-    detail::only_keys(
-        j, "machine file",
-        {"format", "type", "name", "tool_ball_mm", "a_pivot_mm", "c_offset_mm", "dialect", "feed_mm_min", "travel"});
+    detail::only_keys(j, "machine file",
+                      {"format", "type", "name", "tool_ball_mm", "a_pivot_mm", "c_offset_mm", "dialect", "feed_mm_min",
+                       "travel", "tolerances"});
     if (j.contains("format") && j.at("format") != kFormat)
         throw PlanError("machine file: format must be \"" + std::string(kFormat) + "\"");
     MachineFile m;
@@ -84,6 +102,7 @@ MachineFile parse_machine_file(std::string_view json_text) {
                                 "\" (X_mm, Y_mm, Z_mm, A_deg, B_deg, C_deg)");
         }
     }
+    if (j.contains("tolerances")) m.tolerances = parse_tolerances(j.at("tolerances"));
     return m;
 }
 
@@ -107,6 +126,13 @@ std::string write_machine_file(const MachineFile& m) {
         tr[travel_key(a)] = json::array({r.min * scale, r.max * scale});
     }
     j["travel"] = tr;
+    if (m.tolerances.any()) {
+        json t = json::object();
+        if (m.tolerances.location_um) t["location_um"] = *m.tolerances.location_um;
+        if (m.tolerances.angle_arcsec) t["angle_arcsec"] = *m.tolerances.angle_arcsec;
+        if (m.tolerances.circularity_um) t["circularity_um"] = *m.tolerances.circularity_um;
+        j["tolerances"] = t;
+    }
     return j.dump(2) + "\n";
 }
 

@@ -8,6 +8,7 @@
 
 #include "ballbar/acquisition/bar_check.hpp"
 #include "ballbar/acquisition/compute.hpp"
+#include "ballbar/acquisition/verdict.hpp"
 #include "ballbar/analysis/rounding.hpp"
 #include "instrument_link.hpp"
 
@@ -598,6 +599,9 @@ bool Session::review() {
         }
         os << "\n";
     }
+    // The machine file's tolerances (none: no verdict): judged here, before the operator accepts.
+    if (const SsmVerdict v = judge_ssm(type, plan_.machine.tolerances, summary_.tests); v.judged())
+        os << v.summary() << "\n";
     os << "Accept these results, measure every point again, or abort?";
     check_stop();
     const std::size_t c = op_.choose({"review", os.str(), {"accept", "measure-again", "abort"}, 0});

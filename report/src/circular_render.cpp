@@ -16,9 +16,6 @@ namespace ballbar::report {
 
 namespace {
 
-const Rgb kPass{0.0, 0.55, 0.25};
-const Rgb kFail{0.80, 0.10, 0.10};
-
 std::string um(double v) {
     return fixed(v, kUmDecimals) + " µm";
 }
@@ -64,14 +61,6 @@ void conditions(Document& doc, const Report& r) {
     if (!h.notes.empty()) doc.paragraph("Notes: " + h.notes);
 }
 
-void verdict_line(Document& doc, const std::string& text, Rgb color) {
-    const Rect area = doc.reserve(16);
-    set_color(doc.cr(), color);
-    set_font(doc.cr(), 10.5, true);
-    draw_text(doc.cr(), area.x, area.y + 8, fit_text(doc.cr(), text, area.w), HAlign::Left, VAlign::Middle);
-    set_color(doc.cr(), kBlack);
-}
-
 void figures(Document& doc, const CircularTest& c) {
     doc.heading("Circular deviation", 120);
     const auto tol = c.tolerance_um;
@@ -108,11 +97,10 @@ void figures(Document& doc, const CircularTest& c) {
               rows);
     if (tol) {
         const bool pass = c.pass();
-        verdict_line(doc,
-                     std::string(pass ? "PASS" : "FAIL") + ": circular deviation G of " +
-                         (c.runs.size() > 1 ? "every run" : "the run") + (pass ? " within " : " beyond ") +
-                         fixed(*tol, 2) + " µm",
-                     pass ? kPass : kFail);
+        doc.verdict_line(std::string(pass ? "PASS" : "FAIL") + ": circular deviation G of " +
+                             (c.runs.size() > 1 ? "every run" : "the run") + (pass ? " within " : " beyond ") +
+                             fixed(*tol, 2) + " µm",
+                         pass ? kPass : kFail);
         doc.paragraph("Tolerance " + fixed(*tol, 2) + " µm (" + c.tolerance_source +
                           "); the verdict is on G, as `circle analyze --tolerance` judges; G(b) is shown against "
                           "the same value.",

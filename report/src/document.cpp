@@ -182,4 +182,12 @@ Rect Document::reserve(double height) {
     return r;
 }
 
+void Document::verdict_line(const std::string& text, Rgb color) {
+    const Rect area = reserve(16);
+    set_color(cr(), color);
+    set_font(cr(), 10.5, true);
+    draw_text(cr(), area.x, area.y + 8, fit_text(cr(), text, area.w), HAlign::Left, VAlign::Middle);
+    set_color(cr(), kBlack);
+}
+
 }  // namespace ballbar::report

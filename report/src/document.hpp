@@ -42,6 +42,8 @@ class Document {
     /// A section heading; starts a new page if less than `keep_with_next` points would follow it.
     void heading(const std::string& text, double keep_with_next = 80);
     void paragraph(const std::string& text, double size = 7.5, Rgb color = kBlack);
+    /// One line in bold, 10.5 pt, in `color` (a PASS/FAIL verdict).
+    void verdict_line(const std::string& text, Rgb color);
     /// Two-column label/value lines, laid out in `columns` blocks side by side.
     void key_values(const std::vector<std::pair<std::string, std::string>>& rows, int columns = 2);
     void table(const std::vector<Column>& columns, const std::vector<std::vector<std::string>>& rows);

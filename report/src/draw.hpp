@@ -25,6 +25,8 @@ Rgb palette(int i);
 inline constexpr Rgb kBlack{0, 0, 0};
 inline constexpr Rgb kGrey{0.45, 0.45, 0.45};
 inline constexpr Rgb kLightGrey{0.85, 0.85, 0.85};
+inline constexpr Rgb kPass{0.0, 0.55, 0.25};  ///< a verdict within tolerance
+inline constexpr Rgb kFail{0.80, 0.10, 0.10};
 
 enum class HAlign { Left, Center, Right };
 enum class VAlign { Baseline, Top, Middle, Bottom };

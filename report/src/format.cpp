@@ -11,6 +11,10 @@
 
 namespace ballbar::report {
 
+std::string given(double v) {
+    return fmt::format("{}", v);
+}
+
 std::string fixed(double v, int decimals) {
     if (!std::isfinite(v)) return "n/a";
     std::string s = fmt::format("{:.{}f}", v, decimals);

@@ -17,6 +17,8 @@ inline constexpr int kArcsecDecimals = 1;  ///< arcseconds
 /// Fixed point; "-0.00" becomes "0.00"; non-finite values become "n/a".
 std::string fixed(double v, int decimals);
 std::string fixed(const std::optional<double>& v, int decimals, const std::string& missing = "–");
+/// A value as the user gave it (a tolerance: 20, 12.5, 0.75): the shortest text, no trailing zeros.
+std::string given(double v);
 /// Decimals of an uncertainty shown next to a value with `decimals`: one more while it would round to
 /// zero (down to 4), so that "± 0.00" never hides a small but known uncertainty.
 int uncertainty_decimals(double u, int decimals);

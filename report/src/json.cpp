@@ -7,6 +7,7 @@
 #include "ballbar/analysis/rounding.hpp"
 #include "ballbar/analysis/types.hpp"
 #include "ballbar/report/report.hpp"
+#include "format.hpp"
 
 namespace ballbar::report {
 
@@ -160,8 +161,42 @@ json circular(const Report& r) {
 }  // namespace
 
 void set_ssm_tolerances(Report& report, std::optional<double> location_um, std::optional<double> angle_arcsec) {
-    report.location_tolerance_um = location_um;
-    report.angle_tolerance_arcsec = angle_arcsec;
+    if (location_um) {
+        report.location_tolerance_um = location_um;
+        report.location_tolerance_source = "given";
+    }
+    if (angle_arcsec) {
+        report.angle_tolerance_arcsec = angle_arcsec;
+        report.angle_tolerance_source = "given";
+    }
+}
+
+SsmVerdict ssm_verdict(const Report& r) {
+    SsmVerdict v;
+    if (r.location_tolerance_um)
+        for (const auto& l : r.locations) {
+            ++v.checked;
+            if (!(l.error_um.norm() <= *r.location_tolerance_um))
+                v.failures.push_back((l.label.empty() ? "L" + std::to_string(l.location) : l.label) + ": |ΔV| " +
+                                     fixed(l.error_um.norm(), 2) + " µm > " + given(*r.location_tolerance_um) + " µm");
+        }
+    if (r.angle_tolerance_arcsec)
+        for (const auto& o : r.orientation) {
+            if (!o.exact_rad) continue;
+            ++v.checked;
+            const double a = std::abs(analysis::rad_to_arcsec(*o.exact_rad));
+            if (a <= *r.angle_tolerance_arcsec) continue;
+            // A test's two locations are 2t and 2t + 1 (as the CLI numbers them, from 1).
+            const bool one_test =
+                o.from_location >= 0 && o.from_location % 2 == 0 && o.to_location == o.from_location + 1;
+            v.failures.push_back(
+                (one_test ? "test " + std::to_string(o.from_location / 2 + 1)
+                          : "L" + std::to_string(o.from_location) + " → L" + std::to_string(o.to_location)) +
+                ": " + o.symbol + " " + fixed(a, 2) + "″ > " + given(*r.angle_tolerance_arcsec) + "″");
+        }
+    v.judged = v.checked > 0;
+    v.pass = v.judged && v.failures.empty();
+    return v;
 }
 
 nlohmann::json to_json(const Report& r) {
@@ -264,6 +299,17 @@ nlohmann::json to_json(const Report& r) {
         comp.push_back({{"axis", c.axis}, {"before_um", num(c.before)}, {"after_um", num(c.after)}});
     j["compensation"] =
         r.compensation.empty() ? json(nullptr) : json{{"metric", text(r.compensation_metric)}, {"axes", comp}};
+    // The SSM verdict (null: no tolerance, or a circular test, judged in "circular"."tolerance").
+    if (const SsmVerdict v = ssm_verdict(r); v.judged)
+        j["ssm_verdict"] = {{"pass", v.pass},
+                            {"checked", v.checked},
+                            {"failures", v.failures},
+                            {"location_tolerance_um", opt(r.location_tolerance_um)},
+                            {"location_tolerance_source", text(r.location_tolerance_source)},
+                            {"angle_tolerance_arcsec", opt(r.angle_tolerance_arcsec)},
+                            {"angle_tolerance_source", text(r.angle_tolerance_source)}};
+    else
+        j["ssm_verdict"] = nullptr;
     j["circular"] = circular(r);
     j["circular_note"] = text(r.circular_note);
     return j;

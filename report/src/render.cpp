@@ -64,6 +64,45 @@ std::string orientation_source(const Report& r, const OrientationError& o) {
     return "L" + std::to_string(o.from_location) + " → L" + std::to_string(o.to_location);
 }
 
+/// At the top of an SSM report: PASS/FAIL against the tolerances (the machine file's or given), the
+/// figures beyond them, and where the tolerances came from; without tolerances, how to give them.
+void verdict_section(Document& doc, const Report& r) {
+    const SsmVerdict v = ssm_verdict(r);
+    if (!v.judged) {
+        if (r.locations.empty()) return;
+        doc.paragraph(
+            "No tolerance, so no verdict: give them in the machine file (\"tolerances\": {\"location_um\": …, "
+            "\"angle_arcsec\": …}) or with `ballbar report SESSION --location-tolerance UM --angle-tolerance ARCSEC`.",
+            7, kGrey);
+        return;
+    }
+    std::string limits;
+    if (r.location_tolerance_um) limits = "|ΔV| ≤ " + given(*r.location_tolerance_um) + " µm";
+    if (r.angle_tolerance_arcsec)
+        limits +=
+            (limits.empty() ? "" : ", ") + std::string("|Δα|, |Δβ|, |Δγ| ≤ ") + given(*r.angle_tolerance_arcsec) + "″";
+    if (v.pass)
+        doc.verdict_line("PASS: all " + std::to_string(v.checked) + " figures within tolerance (" + limits + ")",
+                         kPass);
+    else
+        doc.verdict_line("FAIL: " + std::to_string(v.failures.size()) + " of " + std::to_string(v.checked) +
+                             " figures beyond tolerance (" + limits + ")",
+                         kFail);
+    for (const std::string& f : v.failures) doc.paragraph("• " + f, 7.5, kFail);
+    std::string source;
+    if (r.location_tolerance_um && r.angle_tolerance_arcsec && r.location_tolerance_source == r.angle_tolerance_source)
+        source = r.location_tolerance_source;
+    else if (r.location_tolerance_um)
+        source = "|ΔV|: " + r.location_tolerance_source +
+                 (r.angle_tolerance_arcsec ? "; angles: " + r.angle_tolerance_source : std::string());
+    else
+        source = "angles: " + r.angle_tolerance_source;
+    doc.paragraph("Tolerances from " + source +
+                      ". Each value is judged as measured; its standard uncertainty is shown beside it in the tables "
+                      "below, not subtracted.",
+                  7, kGrey);
+}
+
 void results_section(Document& doc, const Report& r) {
     doc.heading("Total position errors per location", 60);
     if (r.locations.empty()) {
@@ -237,6 +276,7 @@ int layout(cairo_surface_t* surface, const Report& r, int total_pages) {
         procedure_section(doc, r);
         return doc.finish();
     }
+    verdict_section(doc, r);
     setup_section(doc, r);
     results_section(doc, r);
     doc.heading("Figures", 200);

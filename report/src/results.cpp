@@ -270,8 +270,28 @@ void add_procedure(Report& r, std::string_view kind, const json& p) {
     r.procedure.push_back(e);
 }
 
+/// The stored plan: only its machine file's tolerances reach the report (the points come as points).
+void add_plan(Report& r, const json& p) {
+    const json* machine = find(p, "machine");
+    const json* t = machine && machine->is_object() ? find(*machine, "tolerances") : nullptr;
+    if (!t || !t->is_object()) return;
+    auto positive = [&](const char* key) -> std::optional<double> {
+        const json* v = find(*t, key);
+        if (!v) return std::nullopt;
+        if (!v->is_number() || !(v->get<double>() > 0) || !std::isfinite(v->get<double>()))
+            bad(acquisition::kPlanResultKind, key, "must be a number > 0");
+        return v->get<double>();
+    };
+    if ((r.location_tolerance_um = positive("location_um")))
+        r.location_tolerance_source = "the machine file, stored with the session";
+    if ((r.angle_tolerance_arcsec = positive("angle_arcsec")))
+        r.angle_tolerance_source = "the machine file, stored with the session";
+}
+
 bool add_known_result(Report& report, std::string_view kind, const nlohmann::json& payload) {
-    if (kind == "circular")
+    if (kind == acquisition::kPlanResultKind)
+        add_plan(report, payload);
+    else if (kind == "circular")
         add_circular(report, kind, payload);
     else if (kind == acquisition::kSsmResultKind)
         add_ssm(report, payload);

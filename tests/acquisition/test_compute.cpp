@@ -11,6 +11,7 @@
 #include "ballbar/acquisition/compute.hpp"
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/acquisition/plan.hpp"
+#include "ballbar/acquisition/verdict.hpp"
 
 namespace ballbar::acquisition {
 namespace {
@@ -79,6 +80,47 @@ TEST_P(OrientationUncertainty, AgreesWithAMonteCarloOfTheSameTest) {
 INSTANTIATE_TEST_SUITE_P(AllTypes, OrientationUncertainty,
                          ::testing::Values(MachineType::RRTTT, MachineType::TTTRR, MachineType::RTTTR),
                          [](const auto& p) { return std::string(analysis::to_string(p.param)); });
+
+}  // namespace
+}  // namespace ballbar::acquisition
+
+namespace ballbar::acquisition {
+namespace {
+
+TEST(SsmVerdict, EachLocationAndMeasuredAngleIsJudgedAsMeasuredAndTheSummaryNamesWhatFailed) {
+    TestResult t;
+    t.test = 1;  // the second test: "test 2" on the screen
+    t.kind = TestKind::BothAxes;
+    t.dV1_mm = analysis::Vec3(0.012, 0.0, 0.0);          // 12 µm
+    t.dV2_mm = analysis::Vec3(0.0, 0.018, 0.024);        // 30 µm: at the tolerance, within it
+    t.dV1_std_mm = analysis::Vec3(0.005, 0.005, 0.005);  // not subtracted: the value is judged
+    analysis::OrientationErrors e;
+    e.d_alpha_rad = analysis::deg_to_rad(-41.0 / 3600);  // |Δα| 41″ > 30″
+    e.d_beta_rad = analysis::deg_to_rad(500.0 / 3600);   // not measured on a TTTRR: not judged
+    e.d_gamma_rad = analysis::deg_to_rad(29.0 / 3600);
+    t.orientation.exact = e;
+
+    Tolerances none;
+    EXPECT_FALSE(judge_ssm(analysis::MachineType::TTTRR, none, {t}).judged());
+    EXPECT_EQ(judge_ssm(analysis::MachineType::TTTRR, none, {t}).summary(), "");
+
+    Tolerances tol;
+    tol.location_um = 30;
+    tol.angle_arcsec = 30;
+    const SsmVerdict v = judge_ssm(analysis::MachineType::TTTRR, tol, {t});
+    ASSERT_EQ(v.checks.size(), 4u);  // |ΔV1|, |ΔV2|, Δα, Δγ
+    EXPECT_FALSE(v.pass());
+    EXPECT_EQ(v.summary(), "FAIL: 1 of 4 beyond tolerance — test 2 Δα 41.00″ > 30″");
+
+    tol.angle_arcsec = 45;
+    const SsmVerdict ok = judge_ssm(analysis::MachineType::TTTRR, tol, {t});
+    EXPECT_TRUE(ok.pass());
+    EXPECT_EQ(ok.summary(), "PASS: |ΔV| within 30 µm at both locations; both orientation errors within 45″");
+
+    // A singular orientation has no angle to judge; its locations still are.
+    t.orientation.exact.reset();
+    EXPECT_EQ(judge_ssm(analysis::MachineType::TTTRR, tol, {t}).checks.size(), 2u);
+}
 
 }  // namespace
 }  // namespace ballbar::acquisition

@@ -51,17 +51,24 @@ TEST_P(BadMachineFile, IsRefusedNamingTheField) {
 
 INSTANTIATE_TEST_SUITE_P(
     Values, BadMachineFile,
-    ::testing::Values(Case{"unknown_key", R"("feed_mm_mn":1500)", "unknown key \"feed_mm_mn\""},
-                      Case{"unknown_key_travle", R"("travle":{"X_mm":[0,1]})", "unknown key \"travle\""},
-                      Case{"feed_1e_minus_300", R"("feed_mm_min":1e-300)", "feed_mm_min = 1e-300 is outside"},
-                      Case{"feed_1e308", R"("feed_mm_min":1e308)", "feed_mm_min = 1e+308 is outside"},
-                      Case{"feed_zero", R"("feed_mm_min":0)", "feed_mm_min = 0 is outside"},
-                      Case{"travel_1e308", R"("travel":{"X_mm":[-1e308,1e308]})", "travel.X_mm[0] = -1e+308"},
-                      Case{"travel_rotary_1e308", R"("travel":{"C_deg":[0,1e308]})", "travel.C_deg[1] = 1e+308"},
-                      Case{"pivot_1e308", R"("a_pivot_mm":[1e308,0,0])", "a_pivot_mm[0] = 1e+308"},
-                      Case{"tool_ball_minus_1e6", R"("tool_ball_mm":[0,0,-1e6])", "tool_ball_mm[2] = -1000000"},
-                      // found by fuzz_machine_file: a number past double escaped as nlohmann's out_of_range
-                      Case{"number_past_double", R"("travel":{"X_mm":[-844444443E88888,0]})", "not valid JSON"}),
+    ::testing::Values(
+        Case{"unknown_key", R"("feed_mm_mn":1500)", "unknown key \"feed_mm_mn\""},
+        Case{"unknown_key_travle", R"("travle":{"X_mm":[0,1]})", "unknown key \"travle\""},
+        Case{"feed_1e_minus_300", R"("feed_mm_min":1e-300)", "feed_mm_min = 1e-300 is outside"},
+        Case{"feed_1e308", R"("feed_mm_min":1e308)", "feed_mm_min = 1e+308 is outside"},
+        Case{"feed_zero", R"("feed_mm_min":0)", "feed_mm_min = 0 is outside"},
+        Case{"travel_1e308", R"("travel":{"X_mm":[-1e308,1e308]})", "travel.X_mm[0] = -1e+308"},
+        Case{"travel_rotary_1e308", R"("travel":{"C_deg":[0,1e308]})", "travel.C_deg[1] = 1e+308"},
+        Case{"pivot_1e308", R"("a_pivot_mm":[1e308,0,0])", "a_pivot_mm[0] = 1e+308"},
+        Case{"tool_ball_minus_1e6", R"("tool_ball_mm":[0,0,-1e6])", "tool_ball_mm[2] = -1000000"},
+        Case{"tolerance_unknown_key", R"("tolerances":{"location_mm":0.02})", "unknown key \"location_mm\""},
+        Case{"tolerance_zero", R"("tolerances":{"location_um":0})", "tolerances.location_um = 0"},
+        Case{"tolerance_negative", R"("tolerances":{"angle_arcsec":-5})", "tolerances.angle_arcsec"},
+        Case{"tolerance_mm_for_um", R"("tolerances":{"circularity_um":1e5})", "tolerances.circularity_um = 100000"},
+        Case{"tolerance_not_a_number", R"("tolerances":{"location_um":"20"})", "must be a number"},
+        Case{"tolerances_not_an_object", R"("tolerances":20)", "tolerances must be an object"},
+        // found by fuzz_machine_file: a number past double escaped as nlohmann's out_of_range
+        Case{"number_past_double", R"("travel":{"X_mm":[-844444443E88888,0]})", "not valid JSON"}),
     [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(MachineFile, TheProjectsOwnMachineFilesStayValid) {
@@ -71,6 +78,22 @@ TEST(MachineFile, TheProjectsOwnMachineFilesStayValid) {
         ss << in.rdbuf();
         EXPECT_NO_THROW(parse_machine_file(ss.str())) << f;
     }
+}
+
+TEST(MachineFile, TolerancesAreReadWrittenBackAndOptionalEachOnItsOwn) {
+    const MachineFile m =
+        parse_machine_file("{" + kMachine + R"(,"tolerances":{"location_um":20,"angle_arcsec":12.5}})");
+    EXPECT_EQ(m.tolerances.location_um, 20.0);
+    EXPECT_EQ(m.tolerances.angle_arcsec, 12.5);
+    EXPECT_FALSE(m.tolerances.circularity_um.has_value());
+    const MachineFile back = parse_machine_file(write_machine_file(m));
+    EXPECT_EQ(back.tolerances.location_um, 20.0);
+    EXPECT_EQ(back.tolerances.angle_arcsec, 12.5);
+    EXPECT_FALSE(back.tolerances.circularity_um.has_value());
+    // None given: none written, none read.
+    const MachineFile none = parse_machine_file("{" + kMachine + "}");
+    EXPECT_FALSE(none.tolerances.any());
+    EXPECT_EQ(write_machine_file(none).find("tolerances"), std::string::npos);
 }
 
 // ---- plan files

@@ -143,6 +143,7 @@ TEST(CircularMeasureUseCase, AStoppedRunIsTakenUpAndCompleted) {
     ProgramOperator op(program, acq::circular_program(p.test, p.dialect, p.dwell_s), &stop, 1);
     CircularMeasureOptions o = simulated_circular_measure(emulator_config(d, program));
     o.stop = &stop;
+    o.tolerance_um = 1000;  // the machine file's circularity_um: kept with the session through the resume
     const CircularMeasureResult first = measure_circular(store, p, op, o);
     ASSERT_TRUE(first.summary.interrupted) << first.summary.reason;
     ASSERT_TRUE(first.session_id.has_value());
@@ -171,6 +172,9 @@ TEST(CircularMeasureUseCase, AStoppedRunIsTakenUpAndCompleted) {
     EXPECT_EQ(store.session(id).state, storage::SessionState::completed);
     ASSERT_TRUE(second.stored.has_value());
     EXPECT_NEAR(diagnostic(second.stored->payload_json, "backlash_x_um"), 3.0, 0.6);
+    const auto stored = nlohmann::json::parse(second.stored->payload_json);
+    EXPECT_EQ(stored["tolerance"]["circularity_um"], 1000.0) << "the resumed session is judged as it was begun";
+    EXPECT_TRUE(stored["tolerance"]["pass"].get<bool>());
 }
 
 TEST(CircularMeasureUseCase, OnlyACircularSessionThatExistsIsTakenUp) {

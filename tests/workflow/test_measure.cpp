@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -15,6 +16,8 @@
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/device/pipe.hpp"
+#include "ballbar/report/build.hpp"
+#include "ballbar/report/report.hpp"
 #include "ballbar/workflow/error.hpp"
 #include "ballbar/workflow/measure.hpp"
 
@@ -118,6 +121,77 @@ TEST(MeasureUseCase, ANewSessionIsMeasuredAndStoredCompleted) {
         EXPECT_EQ(e.category(), ErrorCategory::bad_input) << e.what();
     }
     EXPECT_EQ(store.session(s.id).state, storage::SessionState::completed);
+}
+
+/// Keeps the review question's text (the results and the verdict the operator accepts).
+class ReviewingOperator : public FileOperator {
+  public:
+    using FileOperator::FileOperator;
+    std::size_t choose(const acq::Choice& c) override {
+        if (c.what == "review") review = c.prompt;
+        return FileOperator::choose(c);
+    }
+    std::string review;
+};
+
+TEST(MeasureUseCase, TheMachineFilesTolerancesAreJudgedAtTheReviewAndReachTheReport) {
+    Dir d;
+    storage::Store store((d.path / "m.db").string());
+    const fs::path program = d.path / "a.nc";
+    acq::MachineFile m = acq::parse_machine_file(slurp(kData / "tttrr.json"));
+    // Tolerances between the emulator's errors: some figures pass, some fail. Written to the file and read
+    // back, as an operator's machine file would be.
+    m.tolerances.location_um = 30;
+    m.tolerances.angle_arcsec = 50;
+    m = acq::parse_machine_file(acq::write_machine_file(m));
+    ASSERT_EQ(m.tolerances.location_um, 30.0);
+    const acq::Plan plan =
+        acq::make_plan(m, acq::parse_plan_file(slurp(kData / "tttrr-quick.plan.json"), m.geometry.type));
+    const PreparedSession s = new_ssm_session(store, plan, d.device(program));
+    ReviewingOperator op(s.plan, program);
+    const acq::SessionSummary sum = measure_ssm(store, s, op, simulated(d, program));
+    ASSERT_EQ(sum.final_state, acq::State::Done) << sum.reason;
+
+    // The judgement, recomputed here from the stored results alone: |ΔV| ≤ 30 µm, |exact angle| ≤ 50″.
+    std::size_t checked = 0, failed = 0, angles_failed = 0;
+    for (const auto& r : store.results(s.id)) {
+        if (r.kind == acq::kSsmResultKind) {
+            const acq::LocationResult l = acq::location_from_json(r.payload_json);
+            ++checked;
+            failed += l.dV_mm.norm() * 1e3 > 30 ? 1 : 0;
+        } else if (r.kind == acq::kOrientationResultKind) {
+            const acq::TestResult t = acq::test_from_json(r.payload_json);
+            ASSERT_TRUE(t.orientation.exact.has_value());
+            const auto angles = acq::measured_angles(m.geometry.type, t.kind);
+            const auto& e = *t.orientation.exact;
+            for (auto [on, rad] : {std::pair{angles.alpha, e.d_alpha_rad}, std::pair{angles.beta, e.d_beta_rad},
+                                   std::pair{angles.gamma, e.d_gamma_rad}})
+                if (on) ++checked, angles_failed += std::abs(analysis::rad_to_arcsec(rad)) > 50 ? 1 : 0;
+        }
+    }
+    failed += angles_failed;
+    ASSERT_GT(failed, 0u);
+    ASSERT_LT(failed, checked);  // both verdicts exercised
+    const std::string expected = "FAIL: " + std::to_string(failed) + " of " + std::to_string(checked);
+    EXPECT_NE(op.review.find(expected), std::string::npos) << op.review;
+
+    // The report reads the tolerances from the stored plan: the same verdict at its top and in its JSON.
+    const report::Report r = report::build_report(store, s.id);
+    const report::SsmVerdict v = report::ssm_verdict(r);
+    EXPECT_TRUE(v.judged);
+    EXPECT_FALSE(v.pass);
+    EXPECT_EQ(v.checked, checked);
+    EXPECT_EQ(v.failures.size(), failed);
+    const auto j = report::to_json(r);
+    EXPECT_EQ(j["ssm_verdict"]["location_tolerance_um"], 30.0);
+    EXPECT_EQ(j["ssm_verdict"]["angle_tolerance_arcsec"], 50.0);
+    EXPECT_FALSE(j["ssm_verdict"]["pass"].get<bool>());
+    // A tolerance given at report time replaces the file's; the other stays.
+    report::Report given = r;
+    report::set_ssm_tolerances(given, 1000.0, std::nullopt);
+    EXPECT_EQ(given.location_tolerance_source, "given");
+    EXPECT_EQ(given.angle_tolerance_arcsec, 50.0);
+    EXPECT_EQ(report::ssm_verdict(given).failures.size(), angles_failed);
 }
 
 TEST(MeasureUseCase, AStoppedRunIsTakenUpAfterItsLastPoint) {

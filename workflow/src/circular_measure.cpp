@@ -107,7 +107,8 @@ std::int64_t CircularStoreSink::stored(std::uint64_t source_seq) const {
 
 std::int64_t create_circular_session(storage::Store& store, const circ::TestSpec& test, analysis::NcDialect dialect,
                                      double dwell_s, storage::SessionSource source, const std::string& operator_name,
-                                     const std::string& notes, const analysis::MachineGeometry* machine) {
+                                     const std::string& notes, const analysis::MachineGeometry* machine,
+                                     std::optional<double> tolerance_um) {
     storage::NewSession ns;
     if (machine)
         ns.machine = *machine;
@@ -117,12 +118,13 @@ std::int64_t create_circular_session(storage::Store& store, const circ::TestSpec
     ns.operator_name = operator_name;
     ns.procedure = "circular";
     ns.notes = notes;
-    const ojson meta = {{"format", "ballbar-trace/1"},
-                        {"test", ojson::parse(storage::test_json(test))},
-                        {"reference_length_mm", test.radius_mm},
-                        {"has_bar_temp", true},
-                        {"part_program", {{"dialect", analysis::to_string(dialect)}, {"dwell_s", dwell_s}}},
-                        {"extra", ojson::object()}};
+    ojson meta = {{"format", "ballbar-trace/1"},
+                  {"test", ojson::parse(storage::test_json(test))},
+                  {"reference_length_mm", test.radius_mm},
+                  {"has_bar_temp", true},
+                  {"part_program", {{"dialect", analysis::to_string(dialect)}, {"dwell_s", dwell_s}}},
+                  {"extra", ojson::object()}};
+    if (tolerance_um) meta["tolerance_um"] = *tolerance_um;
     ns.metadata_json = meta.dump();
     const std::int64_t id = store.create_session(ns);
     store.start_session(id);
@@ -137,7 +139,12 @@ StoredCircularResult analyze_stored_circular(storage::Store& store, std::int64_t
     } catch (const circ::CircularError& e) {
         throw Error(ErrorCategory::failed, "session " + std::to_string(id) + ": the stored trace: " + e.what());
     }
-    out.payload_json = storage::circular_result_json(out.result, out.trace, std::nullopt);
+    std::optional<double> tolerance_um;
+    const ojson meta = ojson::parse(store.session(id).metadata_json, nullptr, false);
+    if (meta.is_object() && meta.contains("tolerance_um") && meta["tolerance_um"].is_number() &&
+        meta["tolerance_um"].get<double>() > 0)
+        tolerance_um = meta["tolerance_um"].get<double>();
+    out.payload_json = storage::circular_result_json(out.result, out.trace, tolerance_um);
     store.add_result(id, "circular", out.payload_json, std::nullopt, "ballbar circular/1");
     return out;
 }
@@ -183,7 +190,7 @@ CircularMeasureResult measure_circular(storage::Store& store, const PreparedCirc
         const std::int64_t id = create_circular_session(
             store, out.test, prepared.dialect, prepared.dwell_s,
             uri.starts_with("emulator:") ? storage::SessionSource::emulator : storage::SessionSource::device,
-            o.operator_name, o.notes, o.machine ? &*o.machine : nullptr);
+            o.operator_name, o.notes, o.machine ? &*o.machine : nullptr, o.tolerance_um);
         if (o.on_session_created) o.on_session_created(id, out.test);
         return id;
     };

@@ -117,6 +117,7 @@ TruthCheck check_against_truth(storage::Store& store, std::int64_t id, const dev
 SsmDemoResult run_ssm_demo(storage::Store& store, const SsmDemoOptions& o, const SsmDemoEvents& events) {
     SsmDemoResult out;
     out.machine = acq::seed_machine(o.machine);
+    out.machine.tolerances = o.tolerances;
     acq::PlanSpec spec = o.plan.value_or(acq::default_plan(out.machine));
     spec.answers.operator_name = "demo";
     out.plan = acq::make_plan(out.machine, spec);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The machine file (`ballbar-machine/1`, JSON): the nominal geometry with the keys of the readings
-// file's `machine` header, the axis travel limits, the NC dialect and the feed used for measuring moves.
+// file's `machine` header, the axis travel limits, the NC dialect, the feed used for measuring moves and
+// the tolerances the results are judged against.
 // docs/procedure.md documents the format.
 #pragma once
 
@@ -32,11 +33,22 @@ struct AxisRange {
     double max = 1e9;
 };
 
+/// What the shop allows of this machine, for pass/fail verdicts (none given: no verdict). SSM: a
+/// location passes when |ΔV| ≤ location_um, an orientation error when |Δα|, |Δβ| or |Δγ| ≤ angle_arcsec;
+/// circular: a run passes when G ≤ circularity_um (ISO 230-4's circular deviation).
+struct Tolerances {
+    std::optional<double> location_um;
+    std::optional<double> angle_arcsec;
+    std::optional<double> circularity_um;
+    bool any() const { return location_um || angle_arcsec || circularity_um; }
+};
+
 struct MachineFile {
     analysis::MachineGeometry geometry;
     std::array<AxisRange, kAxisCount> travel{};  ///< unlimited unless the file says otherwise
     analysis::NcDialect dialect = analysis::NcDialect::Fanuc;
     double feed_mm_min = 1000;  ///< feed of the measuring moves (G1)
+    Tolerances tolerances;
 
     const AxisRange& range(Axis a) const { return travel[static_cast<std::size_t>(a)]; }
 };

@@ -210,9 +210,20 @@ struct Report {
     std::vector<std::string> discovery_notes;  ///< the noise floor and the verdicts on the residual
     std::vector<CompensationAxis> compensation;
     std::string compensation_metric;  ///< what the bars show, e.g. "max |error| over the check path"
-    /// The user's tolerances for the SSM results (set_ssm_tolerances); none: no verdict.
+    /// The tolerances the SSM results are judged against: the machine file's, stored with the session's
+    /// plan, or given (set_ssm_tolerances); none: no verdict. Each with where it came from.
     std::optional<double> location_tolerance_um, angle_tolerance_arcsec;
+    std::string location_tolerance_source, angle_tolerance_source;  ///< "machine file" or "given"
 };
+
+/// The SSM results against the tolerances: each judged figure beyond its tolerance, in words.
+struct SsmVerdict {
+    bool judged = false;                ///< a tolerance and something to judge against it
+    bool pass = false;                  ///< judged, and nothing beyond tolerance
+    std::size_t checked = 0;            ///< figures judged
+    std::vector<std::string> failures;  ///< "L3 |ΔV| 27.31 µm > 20 µm", "Δβ (test 2) 41.20″ > 30″"
+};
+SsmVerdict ssm_verdict(const Report& report);
 
 /// Judges a circular test against `tolerance_um` (G, µm) given by the user instead of the stored one.
 /// No effect on a report without a circular test.
@@ -221,7 +232,8 @@ void set_circular_tolerance(Report& report, double tolerance_um);
 /// Judges the SSM results against the user's tolerances: a location passes when |ΔV| is within
 /// `location_um`, an orientation error when |exact| is within `angle_arcsec` (to_json's "pass" on each;
 /// null where no tolerance is given or the value is unknown). The uncertainties are not subtracted: they
-/// are reported beside each value (docs/report.md).
+/// are reported beside each value (docs/report.md). A value given replaces the machine file's; one not
+/// given leaves it.
 void set_ssm_tolerances(Report& report, std::optional<double> location_um, std::optional<double> angle_arcsec);
 
 /// The same content as data (schema "ballbar-report/1", docs/report.md).

@@ -73,13 +73,16 @@ class CircularStoreSink : public acquisition::CircularSink {
 /// A new, started circular session holding the test header, as `import` makes one, plus the part
 /// program's dialect and dwell (a resume writes the same program).
 /// `machine`: the machine tested (its machine file's geometry and name); none: stored as "circular test".
+/// `tolerance_um`: G allowed (metadata "tolerance_um"), judged when the session's result is stored.
 std::int64_t create_circular_session(storage::Store& store, const analysis::circular::TestSpec& test,
                                      analysis::NcDialect dialect, double dwell_s, storage::SessionSource source,
                                      const std::string& operator_name, const std::string& notes,
-                                     const analysis::MachineGeometry* machine = nullptr);
+                                     const analysis::MachineGeometry* machine = nullptr,
+                                     std::optional<double> tolerance_um = std::nullopt);
 
 /// A circular session's stored trace analysed as `circle analyze SESSION` does, its result stored with it
-/// (kind "circular"). Error (failed) naming the session when the stored trace cannot be analysed.
+/// (kind "circular"), with the tolerance the session was measured against (metadata "tolerance_um", if
+/// any). Error (failed) naming the session when the stored trace cannot be analysed.
 struct StoredCircularResult {
     analysis::circular::CircularResult result;
     storage::TraceFile trace;
@@ -113,6 +116,9 @@ struct CircularMeasureOptions {
     std::string notes = "circle measure";
     /// The machine tested (`circle measure --machine FILE`): its sessions are listed and trended under it.
     std::optional<analysis::MachineGeometry> machine;
+    /// G allowed, µm (the machine file's tolerances.circularity_um): stored with the session, so its
+    /// result (also after a resume) and its report carry the PASS/FAIL verdict.
+    std::optional<double> tolerance_um;
     /// Fit the feed-in to the bar's range (a test the operator did not shape); the program and the stored
     /// header follow it (on_test_fitted).
     bool fit_feed_in = false;

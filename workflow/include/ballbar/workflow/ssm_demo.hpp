@@ -74,6 +74,7 @@ struct SsmDemoOptions {
     std::optional<acquisition::PlanSpec> plan;  ///< default: acquisition::default_plan of the seed machine
     device::FaultConfig faults;                 ///< the emulator's faults (docs/emulator.md)
     std::string notes;                          ///< stored with the session
+    acquisition::Tolerances tolerances;         ///< the demo machine's, for the verdict (none: no verdict)
     /// The front end's operator (a web page): it answers the questions and is told of each program and
     /// program stop before the emulated machine runs it — the machine waits for the operator as a real
     /// one would. Empty: the plan's answers, at once (the CLI's demo).
