@@ -124,6 +124,9 @@ int run_monitor(const MonitorOptions& o) {
     } catch (const device::DeviceError& e) {
         disconnected = e.kind() == device::DeviceErrorKind::Disconnected;
         failure = e.what();
+        // Nothing answered the ball-bar protocol on a serial port: a gauge there is what the operator meant.
+        if (e.kind() == device::DeviceErrorKind::Timeout && sum.n == 0)
+            failure += device::gauge::serial_gauge_hint(o.device);
     }
     const auto& st = inst->stats();
     // An instrument that answers but never streams is no working instrument: not "0 samples, std 0 µm".

@@ -87,6 +87,23 @@ TEST_P(GaugeCli, EmulateThenMonitor) {
     EXPECT_EQ(j.at("timeouts").get<int>(), 0);
 }
 
+// A gauge's port given as `serial:` (the ball-bar's scheme): nothing answers the ball-bar protocol, and
+// the message names the gauge that does answer there and the URI to use; that URI then works.
+TEST_P(GaugeCli, ASerialUriOnAGaugeSaysWhichGaugeAnswersThere) {
+    GaugeChild emu({BALLBAR_EXE, "emulate", "--instrument", GetParam(), "--pty", "--rate", "40"});
+    const std::string path = emu.line(5000);
+    ASSERT_EQ(path.rfind("/dev/pts/", 0), 0u) << "emulate printed '" << path << "'";
+    ballbar::test::TempDir dir;
+    const auto r = ballbar::test::run(dir, "monitor --device serial:" + path + " --seconds 1");
+    EXPECT_EQ(r.code, 1) << r.err;
+    EXPECT_NE(r.err.find("no answer to Identify"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("a " + GetParam() + " gauge answers on " + path + ": use --device " + GetParam() + ":" + path),
+              std::string::npos)
+        << r.err;
+    const auto ok = ballbar::test::run(dir, "monitor --device " + GetParam() + ":" + path + " --seconds 0.5 --json");
+    EXPECT_EQ(ok.code, 0) << ok.err;
+}
+
 // `ballbar measure` on a gauge behind `ballbar emulate --instrument KIND --pty`, as two processes: it
 // connects, identifies the gauge, measures its rate and resolution, zeroes it in the calibrator and runs
 // the program (the emulated gauge is still: no point is captured); Ctrl-C then stops it (exit 3) with the

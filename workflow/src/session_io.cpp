@@ -12,6 +12,8 @@
 
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
+#include "ballbar/device/gauge.hpp"
+#include "ballbar/device/gauge.hpp"
 #include "ballbar/device/uri.hpp"
 
 namespace ballbar::workflow {
@@ -67,6 +69,12 @@ acq::InstrumentStatus DeviceSource::connect() {
         inst_->configure(rate_hz_, 1);
         return s;
     } catch (const device::DeviceError& e) {
+        // Nothing answered the ball-bar protocol on a serial port: a gauge there is what the operator meant.
+        if (e.kind() == device::DeviceErrorKind::Timeout && inst_) {
+            const std::string uri = inst_->transport().uri();
+            inst_.reset();
+            throw SourceError(e.what() + device::gauge::serial_gauge_hint(uri));
+        }
         throw SourceError(e.what());
     }
 }

@@ -113,6 +113,14 @@ Kind uri_kind(std::string_view uri);
 /// Throws std::invalid_argument (malformed URI) or DeviceError.
 std::unique_ptr<Gauge> open_gauge(std::string_view uri);
 
+/// The serial gauge (digimatic, sylvac, modbus, tried in that order) that answers one reading on the
+/// serial port at `path` within `per_protocol` each; none when nothing does. For a port the ball-bar
+/// protocol found silent: what the operator probably meant.
+std::optional<Kind> find_serial_gauge(const std::string& path, std::chrono::milliseconds per_protocol);
+/// For a `serial:PATH` URI whose instrument did not answer: "; a sylvac gauge answers on PATH: use
+/// --device sylvac:PATH" when one does (find_serial_gauge: two requests of 250 ms per protocol, 1.5 s at most), else "".
+std::string serial_gauge_hint(std::string_view uri);
+
 std::unique_ptr<Gauge> make_sylvac_gauge(std::unique_ptr<Transport> link);
 std::unique_ptr<Gauge> make_digimatic_gauge(std::unique_ptr<Transport> link);
 std::unique_ptr<Gauge> open_modbus_gauge(const std::string& path, int slave, int baud);
