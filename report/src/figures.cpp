@@ -151,7 +151,8 @@ void figure_compensation(Document& doc, const Report& r) {
             before.push_back(c.before);
             after.push_back(c.after);
         }
-        p.y_axis("error", units[k]).bar_categories(cats);
+        // Values on the bars: a compensation's "after" is often a tenth of its "before", a sliver beside it.
+        p.y_axis("error", units[k]).bar_values(units[k] == "arcsec" ? 1 : 2).bar_categories(cats);
         p.bars("before", before, kGrey);
         p.bars("after", after, palette(2));
         p.draw(doc.cr(), {area.x + static_cast<double>(k) * w + (k > 0 ? 6 : 0), area.y, w - 6, area.h});

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "plot.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -102,6 +104,11 @@ void Plot::bands(std::string name, std::vector<std::pair<double, double>> spans,
 void Plot::arrows(std::string name, std::vector<Arrow> arrows, Rgb color) {
     series_.push_back({Kind::Arrows, std::move(name), color, 0.9, false, {}, {}, {}, {}, std::move(arrows)});
 }
+Plot& Plot::bar_values(int decimals) {
+    bar_value_decimals_ = decimals;
+    return *this;
+}
+
 void Plot::bar_categories(std::vector<std::string> categories) {
     categories_ = std::move(categories);
 }
@@ -148,6 +155,7 @@ Plot::Bounds Plot::data_bounds() const {
     if (y_range_) b.y0 = y_range_->first, b.y1 = y_range_->second;
     widen(b.x0, b.x1);
     widen(b.y0, b.y1);
+    if (bar_value_decimals_) b.y1 += 0.08 * (b.y1 - b.y0);  // room for the values above the tallest bars
     return b;
 }
 
@@ -355,6 +363,14 @@ void Plot::draw_series(cairo_t* cr, const Series& s, Rect plot, const Bounds& b,
                 set_color(cr, s.color);
                 cairo_rectangle(cr, x0, std::min(py(0), py(s.y[i])), bw, std::abs(py(s.y[i]) - py(0)));
                 cairo_fill(cr);
+                if (bar_value_decimals_) {
+                    set_color(cr, kBlack);
+                    set_font(cr, 5.5);
+                    const bool up = s.y[i] >= 0;
+                    draw_text(cr, x0 + bw / 2, py(s.y[i]) + (up ? -1.5 : 1.5),
+                              fmt::format("{:.{}f}", s.y[i], *bar_value_decimals_), HAlign::Center,
+                              up ? VAlign::Bottom : VAlign::Top);
+                }
                 if (i < s.errors.size() && std::isfinite(s.errors[i]) && s.errors[i] > 0) {
                     set_color(cr, kBlack);
                     cairo_set_line_width(cr, 0.5);

@@ -43,6 +43,9 @@ class Plot {
     Plot& include_zero_y();
     /// A note drawn in the top-right corner of the legend row (e.g. an arrow scale).
     Plot& note(std::string text);
+    /// Each bar's value written above it with `decimals` decimals: a bar too small to read against its
+    /// neighbours (an "after" next to its "before") still says what it is.
+    Plot& bar_values(int decimals);
 
     void line(std::string name, std::vector<double> x, std::vector<double> y, Rgb color, double width = 0.7);
     void scatter(std::string name, std::vector<double> x, std::vector<double> y, Rgb color, double radius = 1.4,
@@ -77,6 +80,7 @@ class Plot {
     void draw_series(cairo_t* cr, const Series& s, Rect plot, const Bounds& b, int index) const;
 
     std::string title_, note_;
+    std::optional<int> bar_value_decimals_;
     std::string x_label_, x_unit_, y_label_, y_unit_;
     std::optional<std::pair<double, double>> x_range_, y_range_;
     bool equal_ = false, zero_y_ = false;

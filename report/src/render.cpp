@@ -89,15 +89,15 @@ void verdict_section(Document& doc, const Report& r) {
                              " figures beyond tolerance (" + limits + ")",
                          kFail);
     for (const std::string& f : v.failures) doc.paragraph("• " + f, 7.5, kFail);
-    std::string source;
+    std::string source;  // "Tolerances: given." or "Tolerance on |ΔV|: given; on the angles: the machine file, ..."
     if (r.location_tolerance_um && r.angle_tolerance_arcsec && r.location_tolerance_source == r.angle_tolerance_source)
-        source = r.location_tolerance_source;
+        source = "Tolerances: " + r.location_tolerance_source;
     else if (r.location_tolerance_um)
-        source = "|ΔV|: " + r.location_tolerance_source +
-                 (r.angle_tolerance_arcsec ? "; angles: " + r.angle_tolerance_source : std::string());
+        source = "Tolerance on |ΔV|: " + r.location_tolerance_source +
+                 (r.angle_tolerance_arcsec ? "; on the angles: " + r.angle_tolerance_source : std::string());
     else
-        source = "angles: " + r.angle_tolerance_source;
-    doc.paragraph("Tolerances from " + source +
+        source = "Tolerance on the angles: " + r.angle_tolerance_source;
+    doc.paragraph(source +
                       ". Each value is judged as measured; its standard uncertainty is shown beside it in the tables "
                       "below, not subtracted.",
                   7, kGrey);

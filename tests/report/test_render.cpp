@@ -3,6 +3,7 @@
 // and the key figures (the same numbers the JSON holds) in the extracted text.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -69,6 +70,47 @@ TEST_P(RenderByType, PdfHoldsTheKeyFiguresOfTheJson) {
     expect_in_text("session time (s)");
     expect_in_text("bar displacement (µm)");
     expect_in_text("orientation error (arcsec)");
+}
+
+TEST(Render, CompensationBarsCarryTheirValuesAndTheVerdictOpensTheReport) {
+    Report r = testing::synthetic_report(analysis::MachineType::TTTRR, 5000, 3);
+    TempDir dir;
+    auto count = [](const std::string& text, const std::string& s) {
+        std::size_t n = 0;
+        for (auto at = text.find(s); at != std::string::npos; at = text.find(s, at + 1)) ++n;
+        return n;
+    };
+    // No tolerance: no verdict, and the report says how to give one.
+    render_pdf(r, (dir.path / "none.pdf").string());
+    const std::string none = pdf_text(dir.path / "none.pdf");
+    EXPECT_EQ(none.find("PASS:"), std::string::npos);
+    EXPECT_EQ(none.find("FAIL:"), std::string::npos);
+    EXPECT_NE(none.find("No tolerance, so no verdict"), std::string::npos);
+    // Each bar's value written on it: an "after" value is in the text twice, the table's and its bar's.
+    ASSERT_FALSE(r.compensation.empty());
+    for (const auto& c : r.compensation)
+        EXPECT_GE(count(none, fixed_text(c.after, c.unit == "arcsec" ? 1 : 2)), 2u) << c.axis << " " << c.after;
+
+    // A location tolerance between the smallest and the largest |ΔV|: FAIL, with each figure beyond it.
+    double lo = 1e9, hi = 0;
+    for (const auto& l : r.locations) lo = std::min(lo, l.error_um.norm()), hi = std::max(hi, l.error_um.norm());
+    ASSERT_LT(lo, hi);
+    set_ssm_tolerances(r, (lo + hi) / 2, std::nullopt);
+    const SsmVerdict v = ssm_verdict(r);
+    ASSERT_TRUE(v.judged);
+    ASSERT_FALSE(v.failures.empty());
+    render_pdf(r, (dir.path / "fail.pdf").string());
+    const std::string fail = pdf_text(dir.path / "fail.pdf");
+    const auto verdict_at =
+        fail.find("FAIL: " + std::to_string(v.failures.size()) + " of " + std::to_string(v.checked));
+    ASSERT_NE(verdict_at, std::string::npos) << fail.substr(0, 800);
+    EXPECT_LT(verdict_at, fail.find("Set-up")) << "the verdict opens the report";
+    EXPECT_NE(fail.find("Tolerance on |ΔV|: given."), std::string::npos);
+    // Above every |ΔV|: PASS.
+    set_ssm_tolerances(r, hi + 1, std::nullopt);
+    render_pdf(r, (dir.path / "pass.pdf").string());
+    EXPECT_NE(pdf_text(dir.path / "pass.pdf").find("PASS: all " + std::to_string(r.locations.size()) + " figures"),
+              std::string::npos);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, RenderByType,

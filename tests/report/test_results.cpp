@@ -100,7 +100,19 @@ TEST(Results, MalformedPayloadsNameTheKey) {
         EXPECT_NE(std::string(e.what()).find("before"), std::string::npos) << e.what();
     }
     EXPECT_THROW(add_result(r, "ssm", json::array()), ReportError);
-    EXPECT_FALSE(add_result(r, "acquisition.plan", json::object()));  // not shown: ignored
+    // The stored plan: read for its machine file's tolerances alone.
+    EXPECT_TRUE(add_result(r, "acquisition.plan", json::object()));
+    EXPECT_FALSE(r.location_tolerance_um.has_value());
+    EXPECT_TRUE(add_result(r, "acquisition.plan", json::parse(R"({"machine":{"tolerances":{"location_um":20}}})")));
+    EXPECT_EQ(r.location_tolerance_um, 20.0);
+    EXPECT_EQ(r.location_tolerance_source, "the machine file, stored with the session");
+    EXPECT_FALSE(r.angle_tolerance_arcsec.has_value());
+    try {
+        add_result(r, "acquisition.plan", json::parse(R"({"machine":{"tolerances":{"angle_arcsec":-3}}})"));
+        FAIL() << "no error";
+    } catch (const ReportError& e) {
+        EXPECT_NE(std::string(e.what()).find("angle_arcsec"), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace
