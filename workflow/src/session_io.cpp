@@ -13,7 +13,6 @@
 #include "ballbar/acquisition/nc_writer.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/device/gauge.hpp"
-#include "ballbar/device/gauge.hpp"
 #include "ballbar/device/uri.hpp"
 
 namespace ballbar::workflow {

@@ -118,7 +118,8 @@ std::unique_ptr<Gauge> open_gauge(std::string_view uri);
 /// protocol found silent: what the operator probably meant.
 std::optional<Kind> find_serial_gauge(const std::string& path, std::chrono::milliseconds per_protocol);
 /// For a `serial:PATH` URI whose instrument did not answer: "; a sylvac gauge answers on PATH: use
-/// --device sylvac:PATH" when one does (find_serial_gauge: two requests of 250 ms per protocol, 1.5 s at most), else "".
+/// --device sylvac:PATH" when one does (find_serial_gauge: two requests of 250 ms per protocol, 1.5 s at most), else
+/// "".
 std::string serial_gauge_hint(std::string_view uri);
 
 std::unique_ptr<Gauge> make_sylvac_gauge(std::unique_ptr<Transport> link);
