@@ -4,6 +4,8 @@
 // lands where the program meant it relative to the table (compensate.hpp). MODEL is a
 // `ballbar-model/1` JSON file (what `ballbar identify` stores), a model id in the database, or a model
 // name (its latest version). Reports the largest correction and the blocks near a singularity.
+#include <fmt/format.h>
+
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -147,6 +149,31 @@ ba::Pose parse_start(const std::string& text, ba::MachineType type, bool iso_dir
     return p;
 }
 
+/// One warning per axis the program takes beyond the measured span (by more than 0.5° or 1 mm): "the
+/// program commands A from -20° (line 5) to 90° (line 4); the model was measured from 0° to 15°: ...".
+std::vector<std::string> beyond_measured(const ba::PoseRange& program, const ba::PoseRange& measured, bool linear_too) {
+    std::vector<std::string> out;
+    if (program.empty || measured.empty) return out;
+    static constexpr const char* kNames[] = {"X", "Y", "Z", "A", "B", "C"};
+    for (int i = 0; i < ba::PoseRange::kAxes; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        const bool rotary = i >= 3;
+        if (!rotary && !linear_too) continue;
+        const double scale = rotary ? ba::rad_to_deg(1.0) : 1.0, margin = rotary ? 0.5 : 1.0;
+        const double lo = program.min[k] * scale, hi = program.max[k] * scale;
+        const double mlo = measured.min[k] * scale, mhi = measured.max[k] * scale;
+        const bool below = lo<mlo - margin, above = hi> mhi + margin;
+        if (!below && !above) continue;
+        const char* unit = rotary ? "°" : " mm";
+        auto v = [](double x) { return fmt::format("{:.4g}", x); };
+        out.push_back(fmt::format(
+            "the program commands {} from {}{} (line {}) to {}{} (line {}); the model was measured from {}{} to "
+            "{}{}: its corrections beyond that are an extrapolation -- measure there too to be sure of them",
+            kNames[k], v(lo), unit, program.min_line[k], v(hi), unit, program.max_line[k], v(mlo), unit, v(mhi), unit));
+    }
+    return out;
+}
+
 int run_compensate(const CompensateArgs& args, const Globals& globals) {
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -207,6 +234,18 @@ int run_compensate(const CompensateArgs& args, const Globals& globals) {
     // On an error `out` removes its .part: OUT stays as it was.
     const ba::NcCompensateSummary s =
         workflow::compensate_program(model, text, args.program, pc, [&](std::string_view chunk) { out.write(chunk); });
+    // Where the program goes beyond the poses the model was measured at: there its corrections are the
+    // model's extrapolation (a rotary axis's errors beyond the angles measured, a learned term beyond its
+    // data). Rotary axes always; linear axes when the model holds learned terms (a rigid-body model's
+    // location errors hold over the whole travel).
+    if (model.model.measured_poses) {
+        const std::vector<std::string> beyond =
+            beyond_measured(s.commanded, *model.model.measured_poses, !model.model.empirical.empty());
+        for (const std::string& b : beyond) {
+            warnings.push_back(b);
+            if (!args.json) std::cerr << "ballbar: warning: " << b << '\n';
+        }
+    }
     const bool failed = s.not_converged > 0 && !args.force;
     if (!failed) out.commit();
     std::ostream& report = out.is_stdout() ? std::cerr : std::cout;  // the program has stdout

@@ -186,6 +186,7 @@ NcCompensateSummary compensate_nc_program(std::string_view text, const MachineGe
             }
             const Correction c = o.exact ? comp.exact(u) : comp.first_order(u);
             ++sum.points;
+            sum.commanded.add(u, st.line);
             const double lin = std::sqrt(c.du[0] * c.du[0] + c.du[1] * c.du[1] + c.du[2] * c.du[2]);
             const double rot = std::max(std::abs(c.du[3]), std::abs(c.du[4]));
             if (!std::isfinite(lin) || !std::isfinite(rot))

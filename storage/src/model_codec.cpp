@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ballbar/analysis/limits.hpp"
+#include "ballbar/analysis/rounding.hpp"
 #include "ballbar/fileio/json_fields.hpp"
 #include "ballbar/storage/machine_json.hpp"
 
@@ -14,9 +15,11 @@ namespace {
 
 using ojson = nlohmann::ordered_json;  // "format" first, then the keys in the order written
 
-constexpr std::string_view kKeys[] = {"format",  "machine",         "params",   "std",       "unobservable",
-                                      "sockets", "residual_rms_um", "readings", "converged", "empirical",
-                                      "added"};
+constexpr std::string_view kKeys[] = {"format",       "machine",   "params",          "std",
+                                      "unobservable", "sockets",   "residual_rms_um", "readings",
+                                      "converged",    "empirical", "added",           "measured_poses"};
+
+constexpr const char* kPoseKeys[] = {"X_mm", "Y_mm", "Z_mm", "A_deg", "B_deg", "C_deg"};
 
 std::string known_keys() {
     std::string out;
@@ -81,6 +84,16 @@ std::string model_to_json(const ErrorModel& m) {
     if (m.readings) j["readings"] = *m.readings;
     if (m.converged) j["converged"] = *m.converged;
     if (!m.added.empty()) j["added"] = m.added;
+    if (m.measured_poses && !m.measured_poses->empty) {
+        ojson r = ojson::object();
+        for (int i = 0; i < analysis::PoseRange::kAxes; ++i) {
+            const auto k = static_cast<std::size_t>(i);
+            // Angles in degrees as the plan gave them (30, not 30.000000000000004), to 1e-9°.
+            auto out = [i](double v) { return i < 3 ? v : analysis::decimal_round(analysis::rad_to_deg(v), 9); };
+            r[kPoseKeys[k]] = ojson::array({out(m.measured_poses->min[k]), out(m.measured_poses->max[k])});
+        }
+        j["measured_poses"] = r;
+    }
     return j.dump();
 }
 
@@ -160,6 +173,27 @@ ErrorModel model_from_json(std::string_view text) {
     if (f.has("readings")) m.readings = static_cast<int>(f.count("readings", 2147483647));
     if (f.has("converged")) m.converged = f.boolean("converged");
     if (f.has("added")) m.added = f.text("added");
+    if (f.has("measured_poses")) {
+        const ojson& r = j["measured_poses"];
+        if (!r.is_object() || r.size() != 6)
+            throw FormatError("measured_poses: must be {\"X_mm\": [min, max], ... \"C_deg\": [min, max]}");
+        analysis::PoseRange range;
+        range.empty = false;
+        for (int i = 0; i < analysis::PoseRange::kAxes; ++i) {
+            const auto k = static_cast<std::size_t>(i);
+            const std::string key = kPoseKeys[k];
+            const std::string where = "measured_poses." + key;
+            if (!r.contains(key)) throw FormatError(where + ": missing");
+            const ojson& v = r[key];
+            if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number() ||
+                !std::isfinite(v[0].get<double>()) || !std::isfinite(v[1].get<double>()) || v[0] > v[1])
+                throw FormatError(where + ": must be [min, max], finite, min <= max");
+            const double scale = i < 3 ? 1.0 : analysis::deg_to_rad(1.0);
+            range.min[k] = v[0].get<double>() * scale;
+            range.max[k] = v[1].get<double>() * scale;
+        }
+        m.measured_poses = range;
+    }
     return m;
 }
 

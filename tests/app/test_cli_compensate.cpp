@@ -175,6 +175,29 @@ TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
     EXPECT_EQ(cj["singular_lines"][0], 6);
     const std::string out = slurp(d.path / "out.nc");
     EXPECT_NE(out.find("G1"), std::string::npos);
+    // The model keeps where it was measured (the readings' span: A ±60°, C 0–300°); this program stays
+    // inside it, so no warning says otherwise.
+    EXPECT_EQ(a["model"]["measured_poses"]["A_deg"], json::array({-60.0, 60.0})) << a["model"].dump();
+    EXPECT_EQ(a["model"]["measured_poses"]["C_deg"], json::array({0.0, 300.0}));
+    for (const auto& w : cj["warnings"])
+        EXPECT_EQ(w.get<std::string>().find("the program commands"), std::string::npos) << w;
+    // One going beyond: A to 90° (line 4) and C to 330° (line 5), each said with its line.
+    std::ofstream(d.path / "far.nc") << "%\nO0002\nG90\nG1 X50 Y0 Z30 A90 C0 F1000\nG1 X0 Y50 A30 C330\n%\n";
+    const CliRun far =
+        run(d, "compensate --model " + std::to_string(a["model_id"].get<long>()) + " --program '" +
+                   (d.path / "far.nc").string() + "' --out '" + (d.path / "far-out.nc").string() + "' --json");
+    ASSERT_EQ(far.code, 0) << far.err;
+    std::string beyond;
+    const json far_report = json::parse(far.out);  // outlives the loop over its list
+    for (const auto& w : far_report["warnings"]) beyond += w.get<std::string>() + "\n";
+    EXPECT_NE(beyond.find("the program commands A from 30° (line 5) to 90° (line 4); the model was measured from "
+                          "-60° to 60°"),
+              std::string::npos)
+        << beyond;
+    EXPECT_NE(beyond.find("the program commands C from 0° (line 4) to 330° (line 5); the model was measured from 0° "
+                          "to 300°"),
+              std::string::npos)
+        << beyond;
 
     // The same with the model as a file, and a refused model.
     std::ofstream(d.path / "model.json") << a["model"].dump();

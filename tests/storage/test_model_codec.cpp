@@ -65,7 +65,15 @@ TEST(ModelCodec, WhatIsWrittenReadsBackExactly) {
     m.residual_rms_um = 0.123456789;
     m.readings = 123;
     m.converged = false;
+    analysis::PoseRange measured;  // where it was measured: read back as written (angles in degrees)
+    measured.add({-12.5, 0, 3, analysis::deg_to_rad(-30), 0, 0});
+    measured.add({40.25, 1, 2, analysis::deg_to_rad(45), 0, analysis::deg_to_rad(300)});
+    m.measured_poses = measured;
     const std::string text = model_to_json(m);
+    EXPECT_NE(
+        text.find(R"("measured_poses":{"X_mm":[-12.5,40.25],"Y_mm":[0.0,1.0],"Z_mm":[2.0,3.0],"A_deg":[-30.0,45.0])"),
+        std::string::npos)
+        << text;
     EXPECT_EQ(text.rfind(R"({"format":"ballbar-model/1",)", 0), 0u) << text;
     const ErrorModel back = model_from_json(text);
     EXPECT_EQ(model_to_json(back), text);
@@ -74,6 +82,8 @@ TEST(ModelCodec, WhatIsWrittenReadsBackExactly) {
     EXPECT_EQ(back.params[1].value, -1.0 / 7e5);
     EXPECT_EQ(back.sockets[0].offset_mm.x(), 1e-3 / 3);
     EXPECT_EQ(back.machine.a_pivot_mm.x(), 1.5);
+    ASSERT_TRUE(back.measured_poses.has_value());
+    EXPECT_EQ(back.measured_poses->max[5], analysis::deg_to_rad(300.0));
 }
 
 TEST(ModelCodec, RefusesWhatTheFormatDoesNotAllowNamingTheKey) {
@@ -98,6 +108,10 @@ TEST(ModelCodec, RefusesWhatTheFormatDoesNotAllowNamingTheKey) {
         {"{" + kMachine + "," + p + R"(,"readings":6.5})", "readings: must be a non-negative integer"},
         {"{" + kMachine + "," + p + R"(,"converged":1})", "converged: must be true or false"},
         {R"({"machine":{"type":"XYZ"},)" + p + "}", "machine.type"},
+        {"{" + kMachine + "," + p + R"(,"measured_poses":{"X_mm":[0,1]}})", "measured_poses: must be"},
+        {"{" + kMachine + "," + p +
+             R"(,"measured_poses":{"X_mm":[0,1],"Y_mm":[0,1],"Z_mm":[0,1],"A_deg":[5,1],"B_deg":[0,0],"C_deg":[0,0]}})",
+         "measured_poses.A_deg"},
     };
     for (const auto& c : cases) {
         try {

@@ -18,11 +18,14 @@ namespace ba = ballbar::analysis;
 using ojson = nlohmann::ordered_json;
 
 /// A version of the model as it is stored (ballbar-model/1): the parameters `model` names, their values.
-std::string stored_model(const ba::MachineGeometry& machine, const std::vector<ba::Param>& model,
+std::string stored_model(const ba::ReadingSet& readings, const std::vector<ba::Param>& model,
                          const ba::ErrorParams& values, std::span<const ba::LearnedTerm> learned = {},
                          std::string added = {}) {
     storage::ErrorModel m;
-    m.machine = machine;
+    m.machine = readings.machine;
+    ba::PoseRange measured;  // where it was measured: `compensate` says where a program leaves it
+    for (const auto& r : readings.readings) measured.add(r.pose);
+    if (!measured.empty) m.measured_poses = measured;
     for (ba::Param q : model) m.params.push_back({q, values[q], std::nullopt});
     m.empirical.assign(learned.begin(), learned.end());
     m.added = std::move(added);
@@ -31,8 +34,8 @@ std::string stored_model(const ba::MachineGeometry& machine, const std::vector<b
 
 /// Stores the result with every input session and the extended model, one version per step; the last.
 storage::ModelRecord store_result(storage::Store& store, const ReadingInputs& in, const ba::DiscoveryResult& r,
-                                  const std::string& name, const ba::MachineGeometry& machine) {
-    storage::ModelRecord rec = store.save_model(name, stored_model(machine, r.base_model, r.base_fit), in.sessions,
+                                  const std::string& name, const ba::ReadingSet& readings) {
+    storage::ModelRecord rec = store.save_model(name, stored_model(readings, r.base_model, r.base_fit), in.sessions,
                                                 std::nullopt, "discovery: base model");
     std::vector<ba::Param> model = r.base_model;
     for (const ba::DiscoveryStep& st : r.steps) {
@@ -41,7 +44,7 @@ storage::ModelRecord store_result(storage::Store& store, const ReadingInputs& in
         std::snprintf(note, sizeof note, "discovery: added %s%s%s, RMS %.3f -> %.3f µm",
                       std::string(st.effect->id).c_str(), st.effect->iso.empty() ? "" : " ",
                       std::string(st.effect->iso).c_str(), st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
-        rec = store.save_model(name, stored_model(machine, model, st.model_after, {}, std::string(st.effect->id)),
+        rec = store.save_model(name, stored_model(readings, model, st.model_after, {}, std::string(st.effect->id)),
                                in.sessions, rec.id, note);
     }
     std::vector<ba::LearnedTerm> learned;
@@ -50,7 +53,7 @@ storage::ModelRecord store_result(storage::Store& store, const ReadingInputs& in
         char note[300];
         std::snprintf(note, sizeof note, "discovery: learned %s (%s), RMS %.3f -> %.3f µm", st.family.c_str(),
                       st.description.c_str(), st.rms_before_mm * 1e3, st.rms_after_mm * 1e3);
-        rec = store.save_model(name, stored_model(machine, r.final_model, r.final_fit.model, learned, st.family),
+        rec = store.save_model(name, stored_model(readings, r.final_model, r.final_fit.model, learned, st.family),
                                in.sessions, rec.id, note);
     }
     const std::string payload =
@@ -98,7 +101,7 @@ DiscoverResult discover(ReadingInputs in, const DiscoverOptions& o, const StoreO
         const ba::MachineGeometry& machine = out.readings.machine;
         const std::string name =
             !o.save_model.empty() ? o.save_model : (machine.name.empty() ? "machine" : machine.name) + "-discovered";
-        out.stored = store_result(for_writing(), in, out.result, name, machine);
+        out.stored = store_result(for_writing(), in, out.result, name, out.readings);
     }
     return out;
 }

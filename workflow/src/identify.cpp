@@ -55,9 +55,12 @@ ReadingInputs read_inputs(std::span<const std::string> inputs, const StoreOpener
     return in;
 }
 
-bs::ErrorModel fitted_model(const ba::MachineGeometry& machine, const ba::FitSummary& fit) {
+bs::ErrorModel fitted_model(const ba::ReadingSet& readings, const ba::FitSummary& fit) {
     bs::ErrorModel m;
-    m.machine = machine;
+    m.machine = readings.machine;
+    ba::PoseRange measured;
+    for (const auto& r : readings.readings) measured.add(r.pose);
+    if (!measured.empty) m.measured_poses = measured;
     for (const auto& e : fit.estimates) {
         if (!e.param) continue;  // a socket's offset: the sockets below
         if (e.observable)
@@ -88,7 +91,7 @@ IdentifyResult identify(ReadingInputs inputs, const IdentifyOptions& options, co
         // Valid readings that cannot support the fit (too few for the unknowns): the operation failed.
         throw Error(ErrorCategory::failed, std::string("identification failed: ") + e.what());
     }
-    r.model = fitted_model(readings.machine, r.fit);
+    r.model = fitted_model(readings, r.fit);
     const std::string model = bs::model_to_json(r.model);
     r.payload_json = bs::identification_to_json(r.fit, r.model);
     if (options.store_model && r.fit.converged) {

@@ -46,6 +46,7 @@ struct NcCompensateSummary {
     std::vector<int> not_converged_lines;
     std::size_t over_bound = 0;  ///< with `force`: corrections beyond the bounds, written anyway
     bool truncated = false;      ///< no program end (allowed by `allow_truncated`)
+    PoseRange commanded;         ///< the machine poses compensated (work offsets applied), with their lines
 };
 
 /// Receives the output text in chunks (about 1 MiB).

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -54,6 +55,28 @@ struct Pose {
     double A_rad = 0, B_rad = 0, C_rad = 0;
 
     Vec3 linear_mm() const { return {X_mm, Y_mm, Z_mm}; }
+};
+
+/// The span of a set of poses, axis by axis (X, Y, Z in mm; A, B, C in radians): where a model was
+/// measured, where a program goes. `line` holds, for each axis, the NC line of the pose that set its min
+/// and max (0 when not from a program).
+struct PoseRange {
+    static constexpr int kAxes = 6;
+    std::array<double, kAxes> min{}, max{};
+    std::array<int, kAxes> min_line{}, max_line{};
+    bool empty = true;
+    static std::array<double, kAxes> values(const Pose& p) {
+        return {p.X_mm, p.Y_mm, p.Z_mm, p.A_rad, p.B_rad, p.C_rad};
+    }
+    void add(const Pose& p, int line = 0) {
+        const auto v = values(p);
+        for (int i = 0; i < kAxes; ++i) {
+            const auto k = static_cast<std::size_t>(i);
+            if (empty || v[k] < min[k]) min[k] = v[k], min_line[k] = line;
+            if (empty || v[k] > max[k]) max[k] = v[k], max_line[k] = line;
+        }
+        empty = false;
+    }
 };
 
 /// Degrees at the operator's screen, radians inside.

@@ -40,6 +40,9 @@ struct ErrorModel {
     std::optional<int> readings;            ///< readings of that fit
     std::optional<bool> converged;
     std::string added;  ///< `discover`'s versions: the effect or family this version added
+    /// The poses of the readings the model was fitted to ("measured_poses"): `compensate` says where a
+    /// program leaves them. Empty for models written before it was kept.
+    std::optional<analysis::PoseRange> measured_poses;
 
     /// The values as the kinematics take them (parameters the model does not hold are 0).
     analysis::ErrorParams values() const;

@@ -39,8 +39,8 @@ using StoreOpener = std::function<storage::Store&()>;
 /// session, a session without readings.
 ReadingInputs read_inputs(std::span<const std::string> inputs, const StoreOpener& sessions);
 
-/// The model the fit made, as it is stored (ballbar-model/1).
-storage::ErrorModel fitted_model(const analysis::MachineGeometry& machine, const analysis::FitSummary& fit);
+/// The model the fit made of `readings`, as it is stored (ballbar-model/1), with the span of their poses.
+storage::ErrorModel fitted_model(const analysis::ReadingSet& readings, const analysis::FitSummary& fit);
 
 struct IdentifyOptions {
     std::vector<analysis::Param> free_params;  ///< empty: the rotary axes' location errors of the type
