@@ -126,13 +126,25 @@ class CircleOperator : public acq::Operator {
         }
         if (!tty_ || mode_ == Mode::Quiet) return;
         const double dev_um = (p.live_mm - p.expected_mm) * 1e3;
-        out_ << "\r  runs " << p.done << "/" << p.total << "  bar " << std::fixed << std::setprecision(4) << p.live_mm
-             << " mm";
+        out_ << "\r  runs " << p.done << "/" << p.total;
+        if (p.angle_deg) out_ << "  at " << std::fixed << std::setprecision(0) << *p.angle_deg << "°";
+        out_ << "  bar " << std::fixed << std::setprecision(4) << p.live_mm << " mm";
         if (p.out_of_range)
             out_ << " (out of range)";
         else
             out_ << " (" << (dev_um >= 0 ? "+" : "") << std::setprecision(1) << dev_um << " µm from the radius)";
+        if (p.time_left_s > 0)
+            out_ << "  ~" << static_cast<long>(std::lround(p.time_left_s)) << " s left at 100 % feed";
+        if (p.start_wait_left_s)
+            out_ << "  waiting for the feed-in (the run is given up in "
+                 << static_cast<long>(std::lround(*p.start_wait_left_s)) << " s)";
         out_ << "\033[K" << std::flush;
+        line_ = true;
+    }
+    void instrument_waiting(double seconds_left) override {
+        if (!tty_ || mode_ == Mode::Quiet || mode_ == Mode::Json || mode_ == Mode::JsonScripted) return;
+        out_ << "\r  instrument lost: " << static_cast<long>(std::lround(seconds_left))
+             << " s left before the session stops (resumable); reconnect it, or Ctrl-C to stop now\033[K" << std::flush;
         line_ = true;
     }
     void set_program_path(std::string path) { path_ = std::move(path); }

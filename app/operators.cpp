@@ -186,8 +186,25 @@ void TerminalOperator::progress(const acq::Progress& p) {
     }
     if (p.fill > 0) os << "  averaging " << static_cast<int>(p.fill * 100) << " %";
     if (p.time_left_s > 0) os << "  ~" << duration(p.time_left_s) << " left";
+    // The countdowns to the timeouts: the machine standing after the (cycle) start, the point due now.
+    if (p.start_wait_left_s)
+        os << "  waiting for the machine to move (timing starts in " << duration(*p.start_wait_left_s) << ")";
+    else if (p.point_due_s && p.fill == 0)
+        os << "  point due within " << duration(*p.point_due_s);
     out_ << "\r" << os.str() << "\033[K" << std::flush;
     progress_line_ = true;
+}
+
+void TerminalOperator::instrument_waiting(double seconds_left) {
+    if (!tty_) return;  // a log has the periodic "Still no answer" lines
+    out_ << "\r\033[33minstrument lost\033[0m: " << duration(seconds_left)
+         << " left before the session stops (resumable); reconnect the instrument, or Ctrl-C to stop now\033[K"
+         << std::flush;
+    progress_line_ = true;
+}
+
+void TerminalOperator::instrument_back() {
+    end_progress_line();
 }
 
 void TerminalOperator::point_captured(const acq::CapturedPoint& p) {

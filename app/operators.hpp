@@ -36,6 +36,8 @@ class TerminalOperator : public acquisition::Operator {
     void run_program(const analysis::NcProgram& program, std::span<const std::size_t> points, bool retry) override;
     void program_stop(const acquisition::ProgramStop& stop) override;
     void point_captured(const acquisition::CapturedPoint& p) override;
+    void instrument_waiting(double seconds_left) override;
+    void instrument_back() override;
 
   protected:
     void end_progress_line();

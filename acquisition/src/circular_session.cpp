@@ -232,6 +232,26 @@ bool CircularSession::attempt(int number) {
             p.expected_mm = test_.radius_mm;
             p.range_mm = status_.range_mm.value_or(0.0);
             p.out_of_range = !out_of_range.empty() && out_of_range.back() + 1 == samples.size();
+            // Where the tool is and what is left of the test at 100 % feed: the run's arc from the end of its
+            // feed-in (found in the data), then the later runs with their feed-ins and dwells.
+            if (run < test_.runs.size()) {
+                const circ::RunSpec& r = test_.runs[run];
+                const double sweep_deg = 2.0 * r.overshoot_deg + r.data_arc_deg;
+                double left_s = run_duration_s(run) + feed_in_s;
+                if (fi) {
+                    const double done_deg =
+                        std::clamp((now - fi->command_end_s) * v / test_.radius_mm * 180.0 / kPi, 0.0, sweep_deg);
+                    p.angle_deg = r.start_deg + (r.direction == circ::Direction::Ccw ? 1.0 : -1.0) * done_deg;
+                    left_s = std::max(0.0, fi->command_end_s + run_duration_s(run) + feed_in_s - now);
+                } else {  // the countdown to the start timeout: no feed-in found by then gives the run up
+                    const double allowed_s = options_.start_grace_s + options_.dwell_s * static_cast<double>(run + 1) +
+                                             (run > 0 ? run_duration_s(run - 1) + 2 * feed_in_s : 0.0);
+                    p.start_wait_left_s = std::max(0.0, allowed_s - (now - samples.front().time_s));
+                }
+                for (std::size_t k = run + 1; k < test_.runs.size(); ++k)
+                    left_s += options_.dwell_s + 2.0 * feed_in_s + run_duration_s(k);
+                p.time_left_s = left_s;
+            }
             op_.progress(p);
         }
         if (!fi) {

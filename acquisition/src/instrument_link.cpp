@@ -63,6 +63,7 @@ void InstrumentLink::wait_for_instrument() {
         if (i >= settings_.max_reconnect_attempts || waited >= bound)
             fail("the instrument did not come back within " + whole_s(waited) + " s");
         check_stop_();
+        op_.instrument_waiting(std::chrono::duration<double>(bound - waited).count());
         bool back = false;
         try {
             back = source_.reconnect(settings_.read_timeout);

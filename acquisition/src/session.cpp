@@ -336,12 +336,14 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
     for (std::size_t k = 0; k < prog.entries.size(); ++k) entry_of[prog.entries[k].point] = k;
 
     double deadline_s = 0;     // stream time by which the entry at cursor_ is due ...
+    double armed_at_s = 0;     // ... counted from here (the machine's first motion, or the last point) ...
     bool armed = false;        // ... once the machine moves after a start or cycle start
     bool still_seen = false;   // a first sample after the (cycle) start came: the bar length ...
     double still_mm = 0;       // ... it stood at ...
     double still_since_s = 0;  // ... since this time
     auto arm = [&](double from_s, double extra_s) {
         deadline_s = from_s + extra_s + (cursor_ < prog.entries.size() ? entry_timeout_s(prog.entries[cursor_]) : 0);
+        armed_at_s = from_s;
         armed = true;
     };
     bool need_stops = true;
@@ -433,7 +435,12 @@ Session::RunEnd Session::run_program(const std::vector<std::size_t>& points, boo
                 t_s < progress_at_s) {  // the device clock restarted (a reconnect)
                 since_progress = 0;
                 progress_at_s = t_s;
-                report_progress();
+                if (armed)
+                    report_progress(std::nullopt, deadline_s - t_s, t_s - armed_at_s);
+                else if (still_seen && !cs.manual)
+                    report_progress(options_.max_standstill_s - (t_s - still_since_s));
+                else
+                    report_progress();
             }
             if (cursor_ >= prog.entries.size()) return RunEnd::Complete;
             if (need_stops && !prog.entries[cursor_].stops_before.empty()) break;
@@ -614,7 +621,8 @@ bool Session::review() {
     return false;
 }
 
-void Session::report_progress() {
+void Session::report_progress(std::optional<double> start_wait_left_s, std::optional<double> point_due_s,
+                              double entry_elapsed_s) {
     Progress p;
     p.state = sm_.state();
     p.total = plan_.points.size();
@@ -627,7 +635,11 @@ void Session::report_progress() {
         p.expected_mm = pl.nominal_mm;
         for (std::size_t k = cursor_; k < program_->entries.size(); ++k)
             p.time_left_s += entry_time_s(program_->entries[k]);
+        // The entry under way counts down as the machine runs it (not below the rest of the program).
+        p.time_left_s -= std::min(std::max(entry_elapsed_s, 0.0), entry_time_s(program_->entries[cursor_]));
     }
+    if (start_wait_left_s) p.start_wait_left_s = std::max(0.0, *start_wait_left_s);
+    if (point_due_s) p.point_due_s = std::max(0.0, *point_due_s);
     p.live_mm = attributor_->last_length_mm();
     p.range_mm = status_.range_mm.value_or(0.0);
     p.out_of_range = std::abs(p.live_mm - plan_.spec.bar_length_mm) >= status_.range_mm.value_or(1.0);

@@ -186,6 +186,46 @@ TEST_P(FeedOverride, LateStartAndFeedOverrideKeepEveryPointAtItsPose) {
 INSTANTIATE_TEST_SUITE_P(Override, FeedOverride, ::testing::Values(0.5, 1.0, 1.5),
                          [](const auto& p) { return "percent_" + std::to_string(static_cast<int>(p.param * 100)); });
 
+/// Keeps what the screen is told (Progress) while the program runs.
+class ProgressOperator : public SimOperator {
+  public:
+    using SimOperator::SimOperator;
+    void progress(const Progress& p) override { seen.push_back(p); }
+    std::vector<Progress> seen;
+};
+
+// The countdowns a screen shows: while the machine stands after the cycle start (60 s late here), the
+// time until the program's timing runs anyway goes down; once it moves, the point due now has its
+// deadline, and the program's time left goes down as it runs, not only at each captured point.
+TEST(Session, TheScreensCountdownsRunWhileTheMachineStandsAndWhileItMoves) {
+    const Plan plan = tttrr_plan(1);
+    SimOperatorOptions oo;
+    oo.late_start_s = 60;
+    SimSource source(setup_for(plan), plan, {});
+    ProgressOperator op(&source, {}, oo);
+    RecordingSink sink;
+    Session session(plan, source, sink, op, {});
+    ASSERT_EQ(session.run().final_state, State::Done);
+    std::vector<double> waits, left_while_moving;
+    bool due_seen = false;
+    for (const Progress& p : op.seen) {
+        EXPECT_FALSE(p.start_wait_left_s && p.point_due_s) << "one countdown at a time";
+        if (p.start_wait_left_s) waits.push_back(*p.start_wait_left_s);
+        if (p.point_due_s) {
+            due_seen = true;
+            EXPECT_GE(*p.point_due_s, 0.0);
+            if (p.done == 0) left_while_moving.push_back(p.time_left_s);
+        }
+    }
+    ASSERT_GE(waits.size(), 10u) << "the machine stood 60 s: the start countdown was shown";
+    EXPECT_LE(waits.front(), SessionOptions{}.max_standstill_s);
+    EXPECT_LT(waits.back(), waits.front() - 50) << "it went down through the 60 s the machine stood";
+    EXPECT_TRUE(std::is_sorted(waits.rbegin(), waits.rend()));
+    EXPECT_TRUE(due_seen);
+    ASSERT_GE(left_while_moving.size(), 3u);
+    EXPECT_LT(left_while_moving.back(), left_while_moving.front()) << "the time left counts down before a point";
+}
+
 /// The operator loads the wrong program at the retry (the full one): its dwells name points the retry
 /// does not ask for, or that are stored already; none is stored again or elsewhere.
 class WrongProgramOperator : public SimOperator {

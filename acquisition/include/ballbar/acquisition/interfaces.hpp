@@ -135,8 +135,16 @@ struct Progress {
     std::size_t done = 0, total = 0;  ///< points
     double live_mm = 0;               ///< latest bar length
     double expected_mm = 0;
-    double fill = 0;            ///< 0..1 of the current averaging window
-    double time_left_s = 0;     ///< the running program's remaining time at 100 % feed
+    double fill = 0;         ///< 0..1 of the current averaging window
+    double time_left_s = 0;  ///< the running program's remaining time at 100 % feed
+    /// The machine has not moved since the (cycle) start: seconds of standstill left before the program's
+    /// timing runs anyway (a countdown to the start timeout).
+    std::optional<double> start_wait_left_s;
+    /// The program runs: seconds of stream time left before the point due now counts as missing.
+    std::optional<double> point_due_s;
+    /// Circular test: the angle the tool is at on the circle (degrees, the test's plane), once the
+    /// run's feed-in is found in the data.
+    std::optional<double> angle_deg;
     double range_mm = 0;        ///< the transducer's range (±) around its zero; 0 when the instrument does not say
     bool out_of_range = false;  ///< the latest sample is beyond the transducer's range
 };
@@ -176,6 +184,9 @@ class Operator {
     /// The instrument stopped answering: the procedure waits for it at most `timeout_s` (then it stops,
     /// resumable). A screen shows what to do and counts down; the message() before says it in words.
     virtual void instrument_lost(double /*timeout_s*/) {}
+    /// While it is lost, at each attempt to reach it (about every read timeout): the seconds left before
+    /// the session stops (resumable). A screen's countdown.
+    virtual void instrument_waiting(double /*seconds_left*/) {}
     /// The instrument answers again (it is re-referenced before the procedure goes on).
     virtual void instrument_back() {}
 };

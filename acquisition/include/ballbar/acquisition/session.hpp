@@ -112,7 +112,9 @@ class Session {
     void stream_on();
     void compute_all();
     bool review();
-    void report_progress();
+    /// `start_wait_left_s`, `point_due_s`: the run loop's countdowns (Progress).
+    void report_progress(std::optional<double> start_wait_left_s = std::nullopt,
+                         std::optional<double> point_due_s = std::nullopt, double entry_elapsed_s = 0);
     double entry_timeout_s(const ProgramEntry& e) const;
     double entry_time_s(const ProgramEntry& e) const;
 
