@@ -162,7 +162,8 @@ std::vector<std::string> beyond_measured(const ba::PoseRange& program, const ba:
         const double scale = rotary ? ba::rad_to_deg(1.0) : 1.0, margin = rotary ? 0.5 : 1.0;
         const double lo = program.min[k] * scale, hi = program.max[k] * scale;
         const double mlo = measured.min[k] * scale, mhi = measured.max[k] * scale;
-        const bool below = lo<mlo - margin, above = hi> mhi + margin;
+        const bool below = lo < mlo - margin;
+        const bool above = hi > mhi + margin;
         if (!below && !above) continue;
         const char* unit = rotary ? "°" : " mm";
         auto v = [](double x) { return fmt::format("{:.4g}", x); };

@@ -64,8 +64,7 @@ std::string SsmVerdict::summary() const {
         "FAIL: " + std::to_string(failed.size()) + " of " + std::to_string(checks.size()) + " beyond tolerance —";
     for (std::size_t i = 0; i < failed.size(); ++i) {
         const Check& c = *failed[i];
-        const int decimals = 2;
-        s += (i ? "; test " : " test ") + std::to_string(c.test) + " " + c.figure + " " + fixed(c.value, decimals) +
+        s += (i ? "; test " : " test ") + std::to_string(c.test) + " " + c.figure + " " + fixed(c.value, 2) +
              (c.unit == "µm" ? " µm" : "″") + " > " + given(c.tolerance) + (c.unit == "µm" ? " µm" : "″");
     }
     return s;
