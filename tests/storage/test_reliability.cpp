@@ -100,7 +100,17 @@ std::pair<std::int64_t, std::uint64_t> run_and_kill(const std::string& db, std::
             return {0, 0};
         }
     }
-    std::uniform_int_distribution<int> delay_ms(30, 400);
+    // Let it commit several batches first (however slow a loaded or sanitized build is), then a random time.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while ((child.values.size() < 2 || child.values.back() <= 300u) && std::chrono::steady_clock::now() < deadline) {
+        child.drain(std::chrono::milliseconds(20));
+        int status = 0;
+        if (::waitpid(child.pid, &status, WNOHANG) == child.pid) {
+            ADD_FAILURE() << "child exited before committing several batches";
+            return {0, 0};
+        }
+    }
+    std::uniform_int_distribution<int> delay_ms(0, 300);
     child.drain(std::chrono::milliseconds(delay_ms(rng)));
     ::kill(child.pid, SIGKILL);
     int status = 0;
