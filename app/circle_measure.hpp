@@ -23,6 +23,7 @@ struct CircularDemoOptions {
     double radius_mm = 100;
     double feed_mm_min = 1000;
     std::string faults;  ///< the emulator's "faults" object (inline JSON or a file)
+    std::string report;  ///< --report PATH: the session's PDF report, written once it is stored (checked before)
 };
 int run_circular_demo(const CircularDemoOptions& o, const Globals& globals);
 

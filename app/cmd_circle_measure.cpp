@@ -22,7 +22,10 @@
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/device/emulator_host.hpp"
 #include "ballbar/device/uri.hpp"
+#include "ballbar/report/build.hpp"
+#include "ballbar/report/report.hpp"
 #include "ballbar/storage/trace_file.hpp"
+#include "ballbar/version.hpp"
 #include "ballbar/workflow/circular_demo.hpp"
 #include "ballbar/workflow/circular_measure.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
@@ -30,6 +33,7 @@
 #include "circle_measure.hpp"
 #include "circle_output.hpp"
 #include "circle_test_options.hpp"
+#include "files.hpp"
 #include "interrupt.hpp"
 #include "json_out.hpp"
 #include "operators.hpp"
@@ -386,6 +390,13 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
         {"pass", pass}};
     for (const auto& r : result.runs)
         out["runs"].push_back({{"direction", circ::direction_name(r.direction)}, {"circularity_um", r.circularity_um}});
+    if (!o.report.empty()) {
+        report::BuildOptions bo;
+        bo.software_version = kVersion;
+        write_output(o.report, "--report", report::render_pdf_bytes(report::build_report(store, id, bo)),
+                     database_files(globals));
+        out["report"] = o.report;
+    }
     if (o.json) {
         std::cout << out.dump() << std::endl;
     } else {
@@ -407,6 +418,7 @@ int run_circular_demo(const CircularDemoOptions& o, const Globals& globals) {
         if (result.hysteresis_um) std::printf("H: %.3f µm\n", *result.hysteresis_um);
         std::printf("Session %lld stored in %s (%zu samples, %d run%s of the program).\n", static_cast<long long>(id),
                     store.path().c_str(), sum.samples, sum.attempts, sum.attempts == 1 ? "" : "s");
+        if (!o.report.empty()) std::printf("Report written to %s.\n", o.report.c_str());
     }
     if (!pass)
         throw Error(ErrorCategory::failed,

@@ -102,7 +102,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         }
     }
     if (o.test == "circular")
-        return run_circular_demo({o.seed, o.json, o.plane, o.arc_deg, 100.0, 1000.0, o.faults}, globals);
+        return run_circular_demo({o.seed, o.json, o.plane, o.arc_deg, 100.0, 1000.0, o.faults, o.report}, globals);
     if (!o.instrument.empty() && o.instrument != "ballbar")
         return run_gauge_demo({o.instrument, o.machine, o.seed, o.gauge_rate_hz, o.json}, resolve_db_path(globals));
     const auto type = ba::parse_machine_type(o.machine);

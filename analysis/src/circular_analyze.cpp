@@ -49,6 +49,50 @@ double spread_about(const AnglePoint* begin, const AnglePoint* end, const Eigen:
     return hi - lo;
 }
 
+/// Each run's model curve (RunResult::model_*): the fit's explained part at its points, less one
+/// least-squares circle of it over every run, min and max per kModelCurveStep_deg of the data arc.
+void model_curves(const detail::FitInput& in, const detail::FitOutput& fit, double cos_lag, double sin_lag,
+                  CircularResult& result) {
+    const std::size_t n = in.points.size();
+    if (fit.fitted_um.size() != n || n < 3) return;
+    std::vector<AnglePoint> pts(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const detail::FitPoint& p = in.points[i];
+        pts[i] = {fit.fitted_um[i], p.cos_theta * cos_lag + p.dir * p.sin_theta * sin_lag,
+                  p.sin_theta * cos_lag - p.dir * p.cos_theta * sin_lag};
+    }
+    const Eigen::Vector3d c = least_squares_circle(pts.data(), pts.data() + n);
+    for (std::size_t k = 0; k < result.runs.size(); ++k) {
+        RunResult& run = result.runs[k];
+        const RunSpec& spec = result.test.runs[k];
+        const auto columns = static_cast<std::size_t>(std::ceil(spec.data_arc_deg / kModelCurveStep_deg));
+        // Per column the indices of its lowest and highest point.
+        constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+        std::vector<std::size_t> lo(columns, kNone), hi(columns, kNone);
+        std::vector<double> dev(n, 0.0);
+        for (std::size_t i = 0; i < n; ++i) {
+            if (in.points[i].run != static_cast<int>(k)) continue;
+            const AnglePoint& p = pts[i];
+            dev[i] = p.y_um - (c[0] + c[1] * p.c + c[2] * p.s);
+            const double arc = in.points[i].travelled / kDeg - spec.overshoot_deg;
+            const auto col = static_cast<std::size_t>(
+                std::clamp(std::floor(arc / kModelCurveStep_deg), 0.0, static_cast<double>(columns - 1)));
+            if (lo[col] == kNone || dev[i] < dev[lo[col]]) lo[col] = i;
+            if (hi[col] == kNone || dev[i] > dev[hi[col]]) hi[col] = i;
+        }
+        run.model_arc_deg.clear(), run.model_deviation_um.clear();
+        auto add = [&](std::size_t i) {
+            run.model_arc_deg.push_back(in.points[i].travelled / kDeg - spec.overshoot_deg);
+            run.model_deviation_um.push_back(dev[i]);
+        };
+        for (std::size_t col = 0; col < columns; ++col) {
+            if (lo[col] == kNone) continue;
+            add(std::min(lo[col], hi[col]));
+            if (lo[col] != hi[col]) add(std::max(lo[col], hi[col]));
+        }
+    }
+}
+
 /// Max − min radial deviation about the least-squares centre of the points [begin, end).
 double circular_deviation(const AnglePoint* begin, const AnglePoint* end) {
     return end - begin < 3 ? 0.0 : spread_about(begin, end, least_squares_circle(begin, end));
@@ -263,6 +307,7 @@ CircularResult analyze_circular(const TestSpec& test, const std::vector<TraceSam
         result.radial_max_um = std::max(result.radial_max_um, r.radial_max_um);
         result.radial_min_um = std::min(result.radial_min_um, r.radial_min_um);
     }
+    model_curves(in, fit, cos_lag, sin_lag, result);
     result.diagnostics = std::move(fit.diagnostics);
     std::stable_sort(
         result.diagnostics.begin(), result.diagnostics.end(),

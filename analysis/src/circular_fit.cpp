@@ -737,6 +737,14 @@ FitOutput fit_diagnostics(const FitInput& in, const AnalysisOptions& opt) {
     out.mean_radius_um = sol.beta[d.col(kConst)];
     out.mean_radius_std_um = std::sqrt(sol.cov(d.col(kConst), d.col(kConst)));
     out.lag_mean_s = st.tau_mean_s;
+    out.fitted_um.resize(in.points.size());
+    for (std::size_t i = 0; i < in.points.size(); ++i) {
+        const auto row = static_cast<Eigen::Index>(i);
+        double vibration = 0.0;
+        for (int c : {kVibS, kVibC, kDf})
+            if (d.col(c) >= 0) vibration += d.x()(row, d.col(c)) * sol.beta[d.col(c)];
+        out.fitted_um[i] = in.points[i].y_um - sol.residual[row] - vibration;
+    }
 
     // Peak to valley of the terms' part of the fit, over the data. One column: its value times a
     // constant, and rounding a product is monotonic in the column, so the extremes are the column's

@@ -36,6 +36,9 @@ struct FitOutput {
     double mean_radius_um = 0.0;
     double mean_radius_std_um = 0.0;
     double lag_mean_s = 0.0;  ///< the servo lag the fit used (mean of the axes)
+    /// What the fit explains at each of the input's points (µm, the same order), the vibration left out:
+    /// the centre, the mean radius, the lag and every diagnosis of the machine's path together.
+    std::vector<double> fitted_um;
 };
 
 FitOutput fit_diagnostics(const FitInput& input, const AnalysisOptions& options);

@@ -93,6 +93,8 @@ void add_circular(Report& report, std::string_view, const json& p) {
         r.data_start_s = sr.data_start_s;
         r.data_end_s = sr.data_end_s;
         r.samples = sr.samples;
+        r.model_arc_deg = sr.model_arc_deg;
+        r.model_deviation_um = sr.model_deviation_um;
         c.runs.push_back(std::move(r));
     }
     c.bidirectional_um = rec.bidirectional_um;
@@ -193,14 +195,16 @@ void circular_polar(CircularTest& c, std::span<const CircularSample> samples, st
         }
         XYSeries kept = dec.take();
         const double dir = r.direction == "cw" ? -1.0 : 1.0;
-        r.angle_deg.clear();
-        for (double arc : kept.x) {
+        auto angle = [&](double arc) {
             double deg = r.start_deg + dir * (r.overshoot_deg + arc - phase / kDeg);
             deg = std::fmod(deg, 360.0);
-            if (deg < 0) deg += 360.0;
-            r.angle_deg.push_back(deg);
-        }
+            return deg < 0 ? deg + 360.0 : deg;
+        };
+        r.angle_deg.clear();
+        for (double arc : kept.x) r.angle_deg.push_back(angle(arc));
         r.deviation_um = std::move(kept.y);
+        r.model_angle_deg.clear();
+        for (double arc : r.model_arc_deg) r.model_angle_deg.push_back(angle(arc));
     }
     c.plot_deviation_um = circular_plot_range(c);
 }
@@ -215,7 +219,8 @@ void set_circular_tolerance(Report& report, double tolerance_um) {
 double circular_plot_range(const CircularTest& c) {
     double largest = c.tolerance_um ? 0.5 * *c.tolerance_um : 0.0;
     for (const auto& r : c.runs)
-        for (double v : r.deviation_um) largest = std::max(largest, std::abs(v));
+        for (const auto* series : {&r.deviation_um, &r.model_deviation_um})
+            for (double v : *series) largest = std::max(largest, std::abs(v));
     if (!(largest > 0) || !std::isfinite(largest)) return 1.0;
     const double mag = std::pow(10.0, std::floor(std::log10(largest)));
     for (double f : {1.0, 2.0, 2.5, 5.0, 10.0})

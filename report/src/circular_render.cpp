@@ -171,7 +171,11 @@ void polar_plot(Document& doc, const CircularTest& c) {
         set_color(cr, kGrey);
         draw_text(cr, tx, ty, label, h, VAlign::Middle);
     }
-    // The runs.
+    // The runs, each with its diagnosed model's curve dashed over it, a darker shade of the run's colour.
+    auto model_colour = [](std::size_t k) {
+        const Rgb p = palette(k == 0 ? 0 : 1);
+        return Rgb{0.55 * p.r, 0.55 * p.g, 0.55 * p.b};
+    };
     for (std::size_t k = 0; k < c.runs.size(); ++k) {
         const auto& run = c.runs[k];
         if (run.angle_deg.size() < 2) continue;
@@ -186,6 +190,23 @@ void polar_plot(Document& doc, const CircularTest& c) {
                 cairo_line_to(cr, x, y);
         }
         cairo_stroke(cr);
+        if (run.model_angle_deg.size() >= 2 && run.model_angle_deg.size() == run.model_deviation_um.size()) {
+            set_color(cr, model_colour(k));
+            cairo_set_line_width(cr, 0.9);
+            const double dash[] = {3.0, 2.0};
+            cairo_set_dash(cr, dash, 2, 0);
+            cairo_new_path(cr);
+            for (std::size_t i = 0; i < run.model_angle_deg.size(); ++i) {
+                const auto [x, y] = at(run.model_angle_deg[i], rho(run.model_deviation_um[i]));
+                if (i == 0)
+                    cairo_move_to(cr, x, y);
+                else
+                    cairo_line_to(cr, x, y);
+            }
+            cairo_stroke(cr);
+            cairo_set_dash(cr, nullptr, 0, 0);
+            set_color(cr, palette(k == 0 ? 0 : 1));
+        }
         // Where the run's data starts (a dot) and which way it goes (an arrowhead an eighth of the way on,
         // along the path), so the two directions and a reversal's place can be read off the plot.
         const auto [sx, sy] = at(run.angle_deg.front(), rho(run.deviation_um.front()));
@@ -245,6 +266,24 @@ void polar_plot(Document& doc, const CircularTest& c) {
                   VAlign::Middle);
         y += 12;
     }
+    bool model = false;
+    for (std::size_t k = 0; k < c.runs.size(); ++k) {
+        const auto& run = c.runs[k];
+        if (run.model_angle_deg.size() < 2 || run.model_angle_deg.size() != run.model_deviation_um.size()) continue;
+        model = true;
+        set_color(cr, model_colour(k));
+        cairo_set_line_width(cr, 1.2);
+        const double dash[] = {3.0, 2.0};
+        cairo_set_dash(cr, dash, 2, 0);
+        cairo_move_to(cr, lx, y + 4);
+        cairo_line_to(cr, lx + 16, y + 4);
+        cairo_stroke(cr);
+        cairo_set_dash(cr, nullptr, 0, 0);
+        set_color(cr, kBlack);
+        draw_text(cr, lx + 20, y + 4, "run " + std::to_string(k + 1) + ": the diagnosed model", HAlign::Left,
+                  VAlign::Middle);
+        y += 12;
+    }
     set_color(cr, kGrey);
     draw_text(cr, lx, y + 4, "dot: where the data starts; arrowhead: the direction", HAlign::Left, VAlign::Middle);
     y += 12;
@@ -276,9 +315,15 @@ void polar_plot(Document& doc, const CircularTest& c) {
             axis_letters(c.plane, 0) + ", counter-clockwise towards +" + axis_letters(c.plane, 1) + ".",
         "Each run: its data arc only, reduced to first/min/max/last per angle column (720 per run).",
     };
+    std::vector<std::string> all_notes = notes;
+    if (model)
+        all_notes.push_back(
+            "Model (dashed): every diagnosed effect of the path together (all but the vibration, which widens "
+            "the run's line), about its own least-squares circle; where the run's line leaves it, no diagnostic "
+            "explains.");
     set_color(cr, kGrey);
     set_font(cr, 6.8);
-    for (const auto& n : notes) {
+    for (const auto& n : all_notes) {
         for (const auto& line : wrap_text(cr, n, lw)) {
             draw_text(cr, lx, y, line, HAlign::Left, VAlign::Top);
             y += 9;

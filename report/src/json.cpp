@@ -88,6 +88,7 @@ json circular(const Report& r) {
     const CircularTest& c = *r.circular;
     json runs = json::array();
     for (const auto& run : c.runs) {
+        const bool model_drawn = run.model_angle_deg.size() == run.model_deviation_um.size();
         json j{{"direction", run.direction},
                {"start_deg", num(run.start_deg)},
                {"overshoot_deg", num(run.overshoot_deg)},
@@ -99,7 +100,11 @@ json circular(const Report& r) {
                {"data_start_s", opt(run.data_start_s)},
                {"data_end_s", opt(run.data_end_s)},
                {"samples", count(run.samples)},
-               {"polar", {{"angle_deg", nums(run.angle_deg)}, {"deviation_um", nums(run.deviation_um)}}}};
+               {"polar",
+                {{"angle_deg", nums(run.angle_deg)},
+                 {"deviation_um", nums(run.deviation_um)},
+                 {"model_angle_deg", nums(model_drawn ? run.model_angle_deg : std::vector<double>{})},
+                 {"model_deviation_um", nums(model_drawn ? run.model_deviation_um : std::vector<double>{})}}}};
         j["pass"] = c.tolerance_um ? json(run.circularity_um <= *c.tolerance_um) : json(nullptr);
         runs.push_back(j);
     }
@@ -155,7 +160,11 @@ json circular(const Report& r) {
             {"polar_plot",
              {{"deviation_um_at_outer_ring", num(c.plot_deviation_um)},
               {"reference", "one least-squares circle for all runs (centre and radius removed)"},
-              {"decimation", "first/min/max/last per angle column"}}}};
+              {"decimation", "first/min/max/last per angle column"},
+              {"model",
+               "the diagnosed effects of the path together (centre, mean radius, lag, every diagnosis but the "
+               "vibration) about their own "
+               "least-squares circle for all runs, min/max per 0.5° of the data arc"}}}};
 }
 
 }  // namespace

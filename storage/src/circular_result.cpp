@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "ballbar/analysis/rounding.hpp"
 #include "stored_json.hpp"
 
 namespace ballbar::storage {
@@ -20,7 +21,13 @@ std::string circular_result_json(const circ::CircularResult& r, const TraceFile&
     ojson j;
     j["test"] = ojson::parse(test_json(r.test));
     ojson runs = ojson::array();
-    for (const auto& run : r.runs)
+    for (const auto& run : r.runs) {
+        // The model curve at 0.001° and 0.1 nm: finer than the plot can show, and short text.
+        ojson arc = ojson::array(), dev = ojson::array();
+        for (std::size_t i = 0; i < run.model_arc_deg.size() && i < run.model_deviation_um.size(); ++i) {
+            arc.push_back(analysis::decimal_round(run.model_arc_deg[i], 3));
+            dev.push_back(analysis::decimal_round(run.model_deviation_um[i], 4));
+        }
         runs.push_back({{"direction", circ::direction_name(run.direction)},
                         {"circularity_um", run.circularity_um},
                         {"radial_deviation_um", {{"max", run.radial_max_um}, {"min", run.radial_min_um}}},
@@ -28,7 +35,9 @@ std::string circular_result_json(const circ::CircularResult& r, const TraceFile&
                         {"feed_in_lag_ms", run.servo_lag_s * 1e3},
                         {"data_start_s", run.data_start_s},
                         {"data_end_s", run.data_end_s},
-                        {"samples", run.last_sample - run.first_sample}});
+                        {"samples", run.last_sample - run.first_sample},
+                        {"model_curve", {{"arc_deg", arc}, {"deviation_um", dev}}}});
+    }
     j["runs"] = runs;
     j["bidirectional_circularity_um"] = r.bidirectional_um ? ojson(*r.bidirectional_um) : ojson(nullptr);
     j["hysteresis_um"] = r.hysteresis_um ? ojson(*r.hysteresis_um) : ojson(nullptr);
@@ -152,6 +161,23 @@ CircularRecord read_circular(const json& p) {
         r.data_start_s = opt_num(j, "data_start_s", where);
         r.data_end_s = opt_num(j, "data_end_s", where);
         r.samples = opt_num(j, "samples", where);
+        if (const json* m = find(j, "model_curve")) {  // absent in results stored before it was drawn
+            const std::string at = where + "model_curve.";
+            auto numbers = [&](const char* key) {
+                std::vector<double> out;
+                const json* v = m->is_object() ? find(*m, key) : nullptr;
+                if (!v || !v->is_array()) detail::bad_key(at + key, "must be an array of numbers");
+                for (const auto& x : *v) {
+                    if (!x.is_number()) detail::bad_key(at + key, "must be an array of numbers");
+                    out.push_back(x.get<double>());
+                }
+                return out;
+            };
+            r.model_arc_deg = numbers("arc_deg");
+            r.model_deviation_um = numbers("deviation_um");
+            if (r.model_arc_deg.size() != r.model_deviation_um.size())
+                detail::bad_key(at + "deviation_um", "must have as many numbers as arc_deg");
+        }
         if (specs && specs->is_array() && i < specs->size()) {
             const json& s = (*specs)[i];
             r.start_deg = opt_num(s, "start_deg", "test." + where).value_or(0);

@@ -3,6 +3,7 @@
 // traces, and the volumetric combination of three planes.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <random>
 
@@ -253,6 +254,87 @@ TEST(CircularAnalysis, HysteresisIsTheBacklashBetweenTheDirectionsAndNothingForD
     one.runs.resize(1);
     const GenTrace g3 = generate(one, backlash, rng);
     EXPECT_FALSE(circ::analyze_circular(to_test(one), to_samples(g3)).hysteresis_um.has_value());
+}
+
+/// The model curve's deviation from the trace at each of its points, less the least-squares circle of
+/// that difference (a circle is the reference's choice, not a disagreement): what the model does not follow.
+std::vector<std::vector<double>> model_misfit(const circ::CircularResult& r, const GenTrace& g) {
+    const double omega = r.test.feed_mm_min / 60.0 / r.test.radius_mm;
+    constexpr double kDeg = 3.14159265358979323846 / 180.0;
+    struct P {
+        std::size_t run;
+        double theta, d;
+    };
+    std::vector<P> pts;
+    for (std::size_t k = 0; k < r.runs.size(); ++k) {
+        const auto& run = r.runs[k];
+        const auto& spec = r.test.runs[k];
+        const double dir = spec.direction == circ::Direction::Ccw ? 1.0 : -1.0;
+        EXPECT_EQ(run.model_arc_deg.size(), run.model_deviation_um.size());
+        for (std::size_t i = 0; i < run.model_arc_deg.size(); ++i) {
+            const double travelled = (run.model_arc_deg[i] + spec.overshoot_deg) * kDeg;
+            const double t = run.feed_in_end_s + travelled / omega;
+            const auto at = std::lower_bound(g.time_s.begin(), g.time_s.end(), t - 1e-9);
+            const auto j = static_cast<std::size_t>(at - g.time_s.begin());
+            const double y = (g.measured_mm.at(j) - r.test.radius_mm) * 1e3;
+            pts.push_back({k, spec.start_deg * kDeg + dir * travelled, run.model_deviation_um[i] - y});
+        }
+    }
+    Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    for (const auto& p : pts) {
+        const Eigen::Vector3d row(1.0, std::cos(p.theta), std::sin(p.theta));
+        a += row * row.transpose(), b += row * p.d;
+    }
+    const Eigen::Vector3d c = a.ldlt().solve(b);
+    std::vector<std::vector<double>> out(r.runs.size());
+    for (const auto& p : pts) out[p.run].push_back(p.d - (c[0] + c[1] * std::cos(p.theta) + c[2] * std::sin(p.theta)));
+    return out;
+}
+
+TEST(CircularAnalysis, ThePolarPlotsModelCurveFollowsThePathWhereTheDiagnosesExplainItAndLeavesItWhereNot) {
+    std::mt19937_64 rng(29);
+    GenSpec s = base_spec(0, false);
+    s.noise_um = 0.0;  // the trace is the machine's path: the model must be it, less its circle
+    GenEffects fx;
+    fx.backlash_um = {4.0, -2.0};
+    fx.squareness_um_per_m = 30.0;
+    fx.scale_ppm = {20.0, -10.0};
+    fx.cyclic_um = {1.0, 0.0};
+    fx.straightness_um = {1.5, 0.0};
+    fx.socket_offset_um = {12.0, -7.0, 0.0};
+    GenTrace g = generate(s, fx, rng);
+    const auto r = circ::analyze_circular(to_test(s), to_samples(g));
+    double lo = 1e9, hi = -1e9;
+    for (const auto& run : r.runs) {
+        ASSERT_GT(run.model_arc_deg.size(), 700u) << "min and max per 0.5° of a 360° arc";
+        EXPECT_GE(run.model_arc_deg.front(), 0.0);
+        EXPECT_LE(run.model_arc_deg.back(), 360.0);
+        EXPECT_TRUE(std::is_sorted(run.model_arc_deg.begin(), run.model_arc_deg.end()));
+        for (double v : run.model_deviation_um) lo = std::min(lo, v), hi = std::max(hi, v);
+    }
+    // About one circle for all runs, the model's spread is the true G(b) (the generator's own fit).
+    EXPECT_NEAR(hi - lo, g.gb_um, 0.3);
+    for (const auto& misfit : model_misfit(r, g))
+        for (double m : misfit) ASSERT_LT(std::abs(m), 0.15) << "the model leaves a path it explains";
+
+    // A local defect no diagnostic knows (a 3 µm bump over 10° of the first run): the model stays on
+    // the path elsewhere and leaves it there by the bump's height.
+    const double omega = s.feed_mm_min / 60.0 / s.radius_mm;
+    const double bump_from_s = r.runs[0].data_start_s + 100.0 * 3.14159265358979323846 / 180.0 / omega;
+    const double bump_to_s = bump_from_s + 10.0 * 3.14159265358979323846 / 180.0 / omega;
+    for (std::size_t i = 0; i < g.time_s.size(); ++i)
+        if (g.time_s[i] >= bump_from_s && g.time_s[i] < bump_to_s) g.measured_mm[i] += 3e-3;
+    const auto bumped = circ::analyze_circular(to_test(s), to_samples(g));
+    const auto misfit = model_misfit(bumped, g);
+    const auto& arcs = bumped.runs[0].model_arc_deg;
+    double inside = 0.0, outside = 0.0;
+    for (std::size_t i = 0; i < arcs.size(); ++i) {
+        if (arcs[i] > 101.0 && arcs[i] < 109.0) inside = std::max(inside, std::abs(misfit[0][i]));
+        if (arcs[i] < 95.0 || arcs[i] > 115.0) outside = std::max(outside, std::abs(misfit[0][i]));
+    }
+    EXPECT_GT(inside, 2.0) << "the model follows a bump no diagnostic explains";
+    EXPECT_LT(outside, 1.0);
 }
 
 }  // namespace

@@ -65,7 +65,23 @@ TEST(CircularDemo, XyFullCircleMeetsTheEmulatorsTruth) {
 
 TEST(CircularDemo, XyPartialArcMeetsTheEmulatorsTruth) {
     TempDir dir;
-    expect_truth_met(dir, demo(dir, "--plane XY --arc 180 --seed 3"));
+    // --report writes the stored session's PDF (it was once taken and ignored); the report's polar plot
+    // carries each run's model curve from the stored result, over the partial arc.
+    const json j = demo(dir, "--plane XY --arc 180 --seed 3 --report '" + dir.file("circle.pdf") + "'");
+    expect_truth_met(dir, j);
+    EXPECT_EQ(j["report"], dir.file("circle.pdf"));
+    std::ifstream pdf(dir.file("circle.pdf"), std::ios::binary);
+    std::string head(5, '\0');
+    pdf.read(head.data(), 5);
+    EXPECT_EQ(head, "%PDF-");
+    const auto rep = run(dir, "report " + std::to_string(j["session"].get<int>()) + " --json");
+    ASSERT_EQ(rep.code, 0) << rep.err;
+    const json r = json::parse(rep.out);
+    for (const auto& run : r["circular"]["runs"]) {
+        const auto& angles = run["polar"]["model_angle_deg"];
+        ASSERT_GT(angles.size(), 300u) << "min and max per 0.5° of 180°";
+        EXPECT_EQ(angles.size(), run["polar"]["model_deviation_um"].size());
+    }
 }
 
 TEST(CircularDemo, YzPartialArcMeetsTheEmulatorsTruth) {

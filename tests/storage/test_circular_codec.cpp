@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "ballbar/storage/circular_result.hpp"
 #include "ballbar/storage/machine_json.hpp"
@@ -47,6 +49,17 @@ TEST(CircularCodec, AResultInTheVocabularyIsReadTyped) {
     EXPECT_FALSE(c.air_temp_min_C.has_value());
     EXPECT_EQ(c.instrument, R"({"serial":"B1"})");
     EXPECT_DOUBLE_EQ(*c.tolerance_um, 10);
+    EXPECT_TRUE(c.runs[0].model_arc_deg.empty()) << "a result without a model curve has none";
+}
+
+TEST(CircularCodec, TheModelCurveIsReadPerRun) {
+    std::string text = "{" + kTest + "}";
+    text.replace(text.find("\"samples\": 3800"), 15,
+                 R"("samples": 3800, "model_curve": {"arc_deg": [0.1, 0.4, 0.6], "deviation_um": [1.5, -2.25, 0]})");
+    const CircularRecord c = circular_result_from_json(text);
+    EXPECT_EQ(c.runs[0].model_arc_deg, (std::vector<double>{0.1, 0.4, 0.6}));
+    EXPECT_EQ(c.runs[0].model_deviation_um, (std::vector<double>{1.5, -2.25, 0}));
+    EXPECT_TRUE(c.runs[1].model_deviation_um.empty());
 }
 
 TEST(CircularCodec, AResultStoredBeforeTheVocabularyIsReadIntoTheSameRecord) {
@@ -83,6 +96,20 @@ TEST(CircularCodec, AMalformedResultIsRefusedNamingTheKey) {
         FAIL() << "read";
     } catch (const FormatError& e) {
         EXPECT_NE(std::string(e.what()).find("runs[1].circularity_um"), std::string::npos) << e.what();
+    }
+    // The model curve: two arrays of numbers, as long as each other.
+    for (const auto& [curve, key] : std::vector<std::pair<std::string, std::string>>{
+             {R"("model_curve": {"arc_deg": [0, 0.5], "deviation_um": [1]})", "runs[0].model_curve.deviation_um"},
+             {R"("model_curve": {"arc_deg": [0, "x"], "deviation_um": [1, 2]})", "runs[0].model_curve.arc_deg"},
+             {R"("model_curve": [1, 2])", "runs[0].model_curve.arc_deg"}}) {
+        std::string m = "{" + kTest + "}";
+        m.replace(m.find("\"samples\": 3800"), 15, "\"samples\": 3800, " + curve);
+        try {
+            circular_result_from_json(m);
+            ADD_FAILURE() << "read " << curve;
+        } catch (const FormatError& e) {
+            EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+        }
     }
     EXPECT_THROW(circular_result_from_json("[1]"), FormatError);
     EXPECT_THROW(circular_result_from_json("{\"runs\": []}"), FormatError);

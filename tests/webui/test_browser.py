@@ -328,6 +328,12 @@ def main():
           const d = g.getImageData(0, 0, c.width, c.height).data; let n = 0;
           for (let i = 3; i < d.length; i += 4) if (d[i] > 0) n++; return n;""")
         check(drawn > 2000, "the polar plot is drawn (%d pixels)" % drawn)
+        model = page.js("""const c = document.getElementById('polar'), g = c.getContext('2d');
+          const d = g.getImageData(0, 0, c.width, c.height).data; let n = 0;
+          for (let i = 0; i < d.length; i += 4)  // the ccw run's model colour, #0b2f66
+            if (d[i + 3] > 200 && d[i] < 40 && d[i + 1] > 25 && d[i + 1] < 70 && d[i + 2] > 80 && d[i + 2] < 125) n++;
+          return n;""")
+        check(model > 200, "the diagnosed model is drawn over the ccw run (%d pixels of its colour)" % model)
         rows = page.d.find_elements(By.CSS_SELECTOR, "#diagnostics tbody tr")
         check(len(rows) >= 5, "the ranked diagnostics are listed (%d)" % len(rows))
         check(rows[0].find_elements(By.TAG_NAME, "td")[0].text == "1", "the first diagnostic is ranked 1")

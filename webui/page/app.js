@@ -432,8 +432,24 @@ function polar(c) {
     });
     g.stroke();
   });
+  // Each run's diagnosed model, dashed and darker over its run: where the run leaves it, no diagnostic explains.
+  const models = { ccw: '#0b2f66', cw: '#6b1a12' };
+  let withModel = 0;
+  c.runs.forEach((run) => {
+    const a = run.polar.model_angle_deg || [], d = run.polar.model_deviation_um || [];
+    if (a.length < 2 || a.length !== d.length) return;
+    withModel++;
+    g.strokeStyle = models[run.direction] || '#000'; g.lineWidth = 1.5; g.setLineDash([6, 4]); g.beginPath();
+    a.forEach((deg, i) => {
+      const rad = deg * Math.PI / 180, rr = r(d[i]);
+      const x = mid + rr * Math.cos(rad), y = mid - rr * Math.sin(rad);
+      if (i) g.lineTo(x, y); else g.moveTo(x, y);
+    });
+    g.stroke(); g.setLineDash([]);
+  });
   g.font = '14px sans-serif';
   c.runs.forEach((run, i) => { g.fillStyle = colours[run.direction]; g.fillText(run.direction + ': G ' + fmt(run.circularity_um, 1) + ' µm', 10, 20 + 18 * i); });
+  if (withModel) { g.fillStyle = '#333'; g.fillText('dashed: the diagnosed model', 10, 20 + 18 * c.runs.length); }
 }
 
 function tolerances() {

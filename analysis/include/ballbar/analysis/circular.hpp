@@ -104,7 +104,16 @@ struct RunResult {
     double circularity_um = 0.0;  ///< G: least-squares centre, max − min radial deviation
     double radial_max_um = 0.0;   ///< F over this run: measured − programmed radius
     double radial_min_um = 0.0;
+    /// The diagnosed model's curve over the data arc, for the polar plot's overlay: what the fit explains
+    /// (every diagnosis, the lag and the centre; not the vibration, which is of time, not of the path)
+    /// less one least-squares circle fitted to it over every run
+    /// (the reference of G(b) and of the plot), reduced to its min and max per `kModelCurveStep_deg` of the
+    /// arc (in the order they occur). `model_arc_deg`: the commanded angle travelled since the data arc
+    /// began; the samples within a few ms of an axis reversal, which the diagnosis leaves out, are absent.
+    std::vector<double> model_arc_deg;
+    std::vector<double> model_deviation_um;
 };
+inline constexpr double kModelCurveStep_deg = 0.5;
 
 struct DiagnosticResult {
     Diag diag = Diag::BacklashP;

@@ -151,6 +151,10 @@ struct CircularRun {
     std::optional<double> samples;     ///< samples in the data arc
     std::vector<double> angle_deg;     ///< polar plot: the axes' angle (lag included), 0° = +p towards +q
     std::vector<double> deviation_um;  ///< polar plot: radial deviation from the common least-squares circle
+    /// The diagnosed model's curve (the stored result's): the commanded angle travelled since the data
+    /// arc began, and the model's radial deviation about its own least-squares circle (min/max per 0.5°).
+    std::vector<double> model_arc_deg, model_deviation_um;
+    std::vector<double> model_angle_deg;  ///< polar plot: model_arc_deg at the axes' angle, as angle_deg
 };
 
 /// One diagnostic of a circular test, as `circle analyze` reports it.

@@ -16,12 +16,12 @@
 namespace ballbar::storage {
 
 /// The result as one JSON object (text), in docs/cli.md's vocabulary: test, runs[] (direction,
-/// circularity_um, radial_deviation_um, feed-in and data-arc times), bidirectional_circularity_um, hysteresis_um,
-/// radial_deviation_um, diagnostics[] ({key, unit, value, value_std, share_percent, rank}, ranked first),
-/// not_detected, unseparable groups, residual RMS, mean radius, the test conditions (from the trace:
-/// temperatures, instrument) and the tolerance's verdict on G (null without a tolerance). Results
-/// stored before the vocabulary hold the diagnostics as maps (diagnostics, uncertainties,
-/// shares_percent, ranking); the report reads both.
+/// circularity_um, radial_deviation_um, feed-in and data-arc times, the diagnosed model's curve),
+/// bidirectional_circularity_um, hysteresis_um, radial_deviation_um, diagnostics[] ({key, unit, value, value_std,
+/// share_percent, rank}, ranked first), not_detected, unseparable groups, residual RMS, mean radius, the test
+/// conditions (from the trace: temperatures, instrument) and the tolerance's verdict on G (null without a tolerance).
+/// Results stored before the vocabulary hold the diagnostics as maps (diagnostics, uncertainties, shares_percent,
+/// ranking); the report reads both.
 std::string circular_result_json(const analysis::circular::CircularResult& result, const TraceFile& trace,
                                  std::optional<double> tolerance_um);
 
@@ -32,6 +32,8 @@ struct StoredCircularRun {
     double circularity_um = 0;                                    ///< G
     std::optional<double> radial_max_um, radial_min_um;
     std::optional<double> feed_in_end_s, feed_in_lag_ms, data_start_s, data_end_s, samples;
+    /// The diagnosed model's curve (analysis's RunResult::model_*); empty in results stored before it.
+    std::vector<double> model_arc_deg, model_deviation_um;
 };
 
 /// One diagnostic of a stored result, in the stored order (ranked ones first).
