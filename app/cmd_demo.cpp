@@ -193,7 +193,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         put_angles(o_j, "true_first_order_", "", t.result.orientation.first_order, *type, r.kind);
         out["orientation"].push_back(std::move(o_j));
     }
-    const acq::SsmVerdict verdict = acq::judge_ssm(*type, plan.machine.tolerances, sum.tests);
+    const acq::SsmVerdict verdict = acq::judge_ssm(*type, plan.machine.tolerances, plan.spec.tests, sum.tests);
     out["verdict"] = verdict_json(verdict);
     out["samples"] = sum.samples;
     out["programs"] = sum.programs;

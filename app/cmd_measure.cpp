@@ -49,7 +49,7 @@ struct MeasureOptions {
 void print_results(std::ostream& out, const acq::Plan& plan, const acq::SessionSummary& sum) {
     const ba::MachineType type = plan.machine.geometry.type;
     // The verdict first, as the report's summary: the machine file's tolerances (none: no verdict).
-    if (const acq::SsmVerdict v = acq::judge_ssm(type, plan.machine.tolerances, sum.tests); v.judged())
+    if (const acq::SsmVerdict v = acq::judge_ssm(type, plan.machine.tolerances, plan.spec.tests, sum.tests); v.judged())
         out << v.summary() << "\n";
     for (const auto& t : sum.tests) {
         out << "test " << t.test + 1 << " (" << acq::to_string(t.kind) << "):\n  ΔV1 "
@@ -237,12 +237,13 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
     }
     if (sum.final_state == acq::State::Done) {
         if (o.json) {
-            nlohmann::ordered_json j = {{"event", "done"},
-                                        {"session", id},
-                                        {"samples", sum.samples},
-                                        {"programs", sum.programs},
-                                        {"verdict", verdict_json(acq::judge_ssm(plan.machine.geometry.type,
-                                                                                plan.machine.tolerances, sum.tests))}};
+            nlohmann::ordered_json j = {
+                {"event", "done"},
+                {"session", id},
+                {"samples", sum.samples},
+                {"programs", sum.programs},
+                {"verdict", verdict_json(acq::judge_ssm(plan.machine.geometry.type, plan.machine.tolerances,
+                                                        plan.spec.tests, sum.tests))}};
             std::cout << j.dump() << std::endl;
         } else {
             print_results(std::cout, plan, sum);

@@ -79,4 +79,11 @@ inline analysis::Vec3 get_vec3(const nlohmann::json& j, const std::string& key, 
     return to_vec3(j.at(key), key, what);
 }
 
+/// A "tolerances" object: a machine file's (`circular`: circularity_um allowed too) or a plan test's
+/// (`what` "plan file: tests[1]"). Each value > 0 and below a bound that catches mm typed for µm.
+/// PlanError naming the key.
+Tolerances parse_tolerances(const nlohmann::json& t, const std::string& what, bool circular);
+/// The same object back (only the values given).
+nlohmann::json tolerances_json(const Tolerances& tolerances);
+
 }  // namespace ballbar::acquisition::detail

@@ -28,24 +28,6 @@ std::string travel_key(Axis a) {
     return std::string(axis_name(a)) + (is_rotary(a) ? "_deg" : "_mm");
 }
 
-/// The largest tolerance taken: beyond it a value is a typo (mm for µm), not a shop's limit.
-constexpr double kMaxLocation_um = 10000, kMaxAngle_arcsec = 36000, kMaxCircularity_um = 10000;
-
-Tolerances parse_tolerances(const json& t) {
-    if (!t.is_object()) throw PlanError("machine file: tolerances must be an object");
-    detail::only_keys(t, "machine file: tolerances", {"location_um", "angle_arcsec", "circularity_um"});
-    Tolerances out;
-    auto take = [&](const char* key, double max, const char* unit) -> std::optional<double> {
-        if (!t.contains(key)) return std::nullopt;
-        return detail::require_above("machine file", std::string("tolerances.") + key,
-                                     detail::get_number(t, key, "machine file: tolerances"), 0, max, unit);
-    };
-    out.location_um = take("location_um", kMaxLocation_um, "µm");
-    out.angle_arcsec = take("angle_arcsec", kMaxAngle_arcsec, "arcsec");
-    out.circularity_um = take("circularity_um", kMaxCircularity_um, "µm");
-    return out;
-}
-
 }  // namespace
 
 MachineFile parse_machine_file(std::string_view json_text) {
@@ -102,7 +84,7 @@ MachineFile parse_machine_file(std::string_view json_text) {
                                 "\" (X_mm, Y_mm, Z_mm, A_deg, B_deg, C_deg)");
         }
     }
-    if (j.contains("tolerances")) m.tolerances = parse_tolerances(j.at("tolerances"));
+    if (j.contains("tolerances")) m.tolerances = detail::parse_tolerances(j.at("tolerances"), "machine file", true);
     return m;
 }
 
@@ -126,13 +108,7 @@ std::string write_machine_file(const MachineFile& m) {
         tr[travel_key(a)] = json::array({r.min * scale, r.max * scale});
     }
     j["travel"] = tr;
-    if (m.tolerances.any()) {
-        json t = json::object();
-        if (m.tolerances.location_um) t["location_um"] = *m.tolerances.location_um;
-        if (m.tolerances.angle_arcsec) t["angle_arcsec"] = *m.tolerances.angle_arcsec;
-        if (m.tolerances.circularity_um) t["circularity_um"] = *m.tolerances.circularity_um;
-        j["tolerances"] = t;
-    }
+    if (m.tolerances.any()) j["tolerances"] = detail::tolerances_json(m.tolerances);
     return j.dump(2) + "\n";
 }
 
@@ -165,3 +141,38 @@ MachineFile seed_machine(MachineType type) {
 }
 
 }  // namespace ballbar::acquisition
+
+namespace ballbar::acquisition::detail {
+
+namespace {
+/// The largest tolerance taken: beyond it a value is a typo (mm for µm), not a shop's limit.
+constexpr double kMaxLocation_um = 10000, kMaxAngle_arcsec = 36000, kMaxCircularity_um = 10000;
+}  // namespace
+
+Tolerances parse_tolerances(const nlohmann::json& t, const std::string& what, bool circular) {
+    if (!t.is_object()) throw PlanError(what + ": tolerances must be an object");
+    if (circular)
+        only_keys(t, what + ": tolerances", {"location_um", "angle_arcsec", "circularity_um"});
+    else
+        only_keys(t, what + ": tolerances", {"location_um", "angle_arcsec"});
+    Tolerances out;
+    auto take = [&](const char* key, double max, const char* unit) -> std::optional<double> {
+        if (!t.contains(key)) return std::nullopt;
+        return require_above(what, std::string("tolerances.") + key, get_number(t, key, what + ": tolerances"), 0, max,
+                             unit);
+    };
+    out.location_um = take("location_um", kMaxLocation_um, "µm");
+    out.angle_arcsec = take("angle_arcsec", kMaxAngle_arcsec, "arcsec");
+    if (circular) out.circularity_um = take("circularity_um", kMaxCircularity_um, "µm");
+    return out;
+}
+
+nlohmann::json tolerances_json(const Tolerances& tolerances) {
+    nlohmann::json t = nlohmann::json::object();
+    if (tolerances.location_um) t["location_um"] = *tolerances.location_um;
+    if (tolerances.angle_arcsec) t["angle_arcsec"] = *tolerances.angle_arcsec;
+    if (tolerances.circularity_um) t["circularity_um"] = *tolerances.circularity_um;
+    return t;
+}
+
+}  // namespace ballbar::acquisition::detail

@@ -152,7 +152,7 @@ namespace {
 TestSpec parse_test(const json& jt, MachineType type, int index) {
     const std::string what = "plan file: tests[" + std::to_string(index) + "]";
     if (!jt.is_object()) throw PlanError(what + " must be an object");
-    detail::only_keys(jt, what, {"socket_mm", "rotation_deg"});
+    detail::only_keys(jt, what, {"socket_mm", "rotation_deg", "tolerances"});
     TestSpec t;
     if (!jt.contains("socket_mm")) throw PlanError(what + ": missing key \"socket_mm\"");
     t.socket_mm = detail::to_vec3(jt.at("socket_mm"), "socket_mm", what);
@@ -176,6 +176,7 @@ TestSpec parse_test(const json& jt, MachineType type, int index) {
             throw PlanError(what + ": an RTTTR test measures Δβ (B, spindle) or Δα (A, table) alone; give one angle");
         t.kind = t.second_rad != 0 ? TestKind::SpindleBeta : TestKind::TableAlpha;
     }
+    if (jt.contains("tolerances")) t.tolerances = detail::parse_tolerances(jt.at("tolerances"), what, false);
     return t;
 }
 
@@ -266,7 +267,9 @@ std::string write_plan_file(const PlanSpec& s, MachineType type) {
         json rot = json::object();
         rot[std::string(1, axes.first)] = rad_to_deg(t.first_rad);
         rot[std::string(1, axes.second)] = rad_to_deg(t.second_rad);
-        tests.push_back({{"socket_mm", {t.socket_mm.x(), t.socket_mm.y(), t.socket_mm.z()}}, {"rotation_deg", rot}});
+        json test = {{"socket_mm", {t.socket_mm.x(), t.socket_mm.y(), t.socket_mm.z()}}, {"rotation_deg", rot}};
+        if (t.tolerances.any()) test["tolerances"] = detail::tolerances_json(t.tolerances);
+        tests.push_back(test);
     }
     j["tests"] = tests;
     j["capture"] = {{"mode", s.capture.manual ? "manual" : "auto"}, {"window_s", s.capture.window_s},
@@ -282,7 +285,7 @@ std::string write_plan_file(const PlanSpec& s, MachineType type) {
 PlanSpec default_plan(const MachineFile& machine) {
     PlanSpec s;
     auto add = [&](Vec3 socket, double first_deg, double second_deg, TestKind kind) {
-        s.tests.push_back({socket, deg_to_rad(first_deg), deg_to_rad(second_deg), kind});
+        s.tests.push_back({socket, deg_to_rad(first_deg), deg_to_rad(second_deg), kind, {}});
     };
     switch (machine.geometry.type) {
         case MachineType::RRTTT:

@@ -607,7 +607,7 @@ bool Session::review() {
         os << "\n";
     }
     // The machine file's tolerances (none: no verdict): judged here, before the operator accepts.
-    if (const SsmVerdict v = judge_ssm(type, plan_.machine.tolerances, summary_.tests); v.judged())
+    if (const SsmVerdict v = judge_ssm(type, plan_.machine.tolerances, plan_.spec.tests, summary_.tests); v.judged())
         os << v.summary() << "\n";
     os << "Accept these results, measure every point again, or abort?";
     check_stop();

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "ballbar/acquisition/verdict.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -44,20 +45,29 @@ bool SsmVerdict::pass() const {
 std::string SsmVerdict::summary() const {
     if (checks.empty()) return "";
     std::size_t locations = 0, angles = 0;
-    std::optional<double> location_tol, angle_tol;
+    // Each kind's smallest and largest tolerance: one value, or the tests' own between them.
+    std::optional<double> location_lo, location_hi, angle_lo, angle_hi;
     std::vector<const Check*> failed;
     for (const Check& c : checks) {
         const bool is_location = c.unit == "µm";
         (is_location ? locations : angles) += 1;
-        (is_location ? location_tol : angle_tol) = c.tolerance;
+        auto& lo = is_location ? location_lo : angle_lo;
+        auto& hi = is_location ? location_hi : angle_hi;
+        lo = std::min(lo.value_or(c.tolerance), c.tolerance);
+        hi = std::max(hi.value_or(c.tolerance), c.tolerance);
         if (!c.pass()) failed.push_back(&c);
     }
+    auto within = [](double lo, double hi, const char* unit) {
+        return lo == hi ? "within " + given(lo) + unit
+                        : "within each test's tolerance (" + given(lo) + " to " + given(hi) + unit + ")";
+    };
     if (failed.empty()) {
         std::string s = "PASS:";
-        if (location_tol) s += " |ΔV| within " + given(*location_tol) + " µm at " + all_of(locations, "location");
-        if (angle_tol)
-            s += std::string(location_tol ? ";" : "") + " " + all_of(angles, "orientation error") + " within " +
-                 given(*angle_tol) + "″";
+        if (location_lo)
+            s += " |ΔV| " + within(*location_lo, *location_hi, " µm") + " at " + all_of(locations, "location");
+        if (angle_lo)
+            s += std::string(location_lo ? ";" : "") + " " + all_of(angles, "orientation error") + " " +
+                 within(*angle_lo, *angle_hi, "″");
         return s;
     }
     std::string s =
@@ -70,9 +80,16 @@ std::string SsmVerdict::summary() const {
     return s;
 }
 
-SsmVerdict judge_ssm(analysis::MachineType type, const Tolerances& tol, const std::vector<TestResult>& tests) {
+SsmVerdict judge_ssm(analysis::MachineType type, const Tolerances& machine, const std::vector<TestSpec>& plan_tests,
+                     const std::vector<TestResult>& tests) {
     SsmVerdict v;
     for (const TestResult& t : tests) {
+        Tolerances tol = machine;  // the test's own, where the plan gives them
+        if (t.test >= 0 && static_cast<std::size_t>(t.test) < plan_tests.size()) {
+            const Tolerances& own = plan_tests[static_cast<std::size_t>(t.test)].tolerances;
+            if (own.location_um) tol.location_um = own.location_um;
+            if (own.angle_arcsec) tol.angle_arcsec = own.angle_arcsec;
+        }
         if (tol.location_um) {
             v.checks.push_back({t.test + 1, "|ΔV1|", t.dV1_mm.norm() * 1e3, *tol.location_um, "µm"});
             v.checks.push_back({t.test + 1, "|ΔV2|", t.dV2_mm.norm() * 1e3, *tol.location_um, "µm"});

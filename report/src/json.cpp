@@ -173,36 +173,62 @@ void set_ssm_tolerances(Report& report, std::optional<double> location_um, std::
     if (location_um) {
         report.location_tolerance_um = location_um;
         report.location_tolerance_source = "given";
+        report.test_location_tolerance_um.clear();
     }
     if (angle_arcsec) {
         report.angle_tolerance_arcsec = angle_arcsec;
         report.angle_tolerance_source = "given";
+        report.test_angle_tolerance_arcsec.clear();
     }
+}
+
+namespace {
+
+/// A test's two locations are 2t and 2t + 1: the test of an orientation error from both, else −1.
+int test_of(const OrientationError& o) {
+    return o.from_location >= 0 && o.from_location % 2 == 0 && o.to_location == o.from_location + 1
+               ? o.from_location / 2
+               : -1;
+}
+
+std::optional<double> own_or(const std::vector<std::optional<double>>& own, int test, std::optional<double> machine) {
+    if (test >= 0 && static_cast<std::size_t>(test) < own.size() && own[static_cast<std::size_t>(test)])
+        return own[static_cast<std::size_t>(test)];
+    return machine;
+}
+
+}  // namespace
+
+std::optional<double> Report::location_tolerance_at(int location) const {
+    return own_or(test_location_tolerance_um, location >= 0 ? location / 2 : -1, location_tolerance_um);
+}
+
+std::optional<double> Report::angle_tolerance_for(const OrientationError& o) const {
+    return own_or(test_angle_tolerance_arcsec, test_of(o), angle_tolerance_arcsec);
 }
 
 SsmVerdict ssm_verdict(const Report& r) {
     SsmVerdict v;
-    if (r.location_tolerance_um)
-        for (const auto& l : r.locations) {
-            ++v.checked;
-            if (!(l.error_um.norm() <= *r.location_tolerance_um))
-                v.failures.push_back((l.label.empty() ? "L" + std::to_string(l.location) : l.label) + ": |ΔV| " +
-                                     fixed(l.error_um.norm(), 2) + " µm > " + given(*r.location_tolerance_um) + " µm");
-        }
-    if (r.angle_tolerance_arcsec)
-        for (const auto& o : r.orientation) {
-            if (!o.exact_rad) continue;
-            ++v.checked;
-            const double a = std::abs(analysis::rad_to_arcsec(*o.exact_rad));
-            if (a <= *r.angle_tolerance_arcsec) continue;
-            // A test's two locations are 2t and 2t + 1 (as the CLI numbers them, from 1).
-            const bool one_test =
-                o.from_location >= 0 && o.from_location % 2 == 0 && o.to_location == o.from_location + 1;
-            v.failures.push_back(
-                (one_test ? "test " + std::to_string(o.from_location / 2 + 1)
-                          : "L" + std::to_string(o.from_location) + " → L" + std::to_string(o.to_location)) +
-                ": " + o.symbol + " " + fixed(a, 2) + "″ > " + given(*r.angle_tolerance_arcsec) + "″");
-        }
+    for (const auto& l : r.locations) {
+        const auto tol = r.location_tolerance_at(l.location);
+        if (!tol) continue;
+        ++v.checked;
+        if (!(l.error_um.norm() <= *tol))
+            v.failures.push_back((l.label.empty() ? "L" + std::to_string(l.location) : l.label) + ": |ΔV| " +
+                                 fixed(l.error_um.norm(), 2) + " µm > " + given(*tol) + " µm");
+    }
+    for (const auto& o : r.orientation) {
+        const auto tol = r.angle_tolerance_for(o);
+        if (!tol || !o.exact_rad) continue;
+        ++v.checked;
+        const double a = std::abs(analysis::rad_to_arcsec(*o.exact_rad));
+        if (a <= *tol) continue;
+        const int test = test_of(o);
+        v.failures.push_back((test >= 0
+                                  ? "test " + std::to_string(test + 1)
+                                  : "L" + std::to_string(o.from_location) + " → L" + std::to_string(o.to_location)) +
+                             ": " + o.symbol + " " + fixed(a, 2) + "″ > " + given(*tol) + "″");
+    }
     v.judged = v.checked > 0;
     v.pass = v.judged && v.failures.empty();
     return v;
@@ -221,18 +247,19 @@ nlohmann::json to_json(const Report& r) {
 
     json& locs = j["locations"] = json::array();
     for (const auto& l : r.locations)
-        locs.push_back(
-            {{"location", l.location},
-             {"label", l.label},
-             {"position_mm", vec(l.position_mm)},
-             {"dV_um", vec(l.error_um)},
-             {"dV_um_std", vec(l.uncertainty_um)},
-             {"magnitude_um", num(l.error_um.norm())},
-             {"points", l.points},
-             {"residual_rms_um", opt(l.residual_rms_um)},
-             {"condition_number", opt(l.condition)},
-             {"tolerance_um", opt(r.location_tolerance_um)},
-             {"pass", r.location_tolerance_um ? json(l.error_um.norm() <= *r.location_tolerance_um) : json(nullptr)}});
+        locs.push_back({{"location", l.location},
+                        {"label", l.label},
+                        {"position_mm", vec(l.position_mm)},
+                        {"dV_um", vec(l.error_um)},
+                        {"dV_um_std", vec(l.uncertainty_um)},
+                        {"magnitude_um", num(l.error_um.norm())},
+                        {"points", l.points},
+                        {"residual_rms_um", opt(l.residual_rms_um)},
+                        {"condition_number", opt(l.condition)},
+                        {"tolerance_um", opt(r.location_tolerance_at(l.location))},
+                        {"pass", r.location_tolerance_at(l.location)
+                                     ? json(l.error_um.norm() <= *r.location_tolerance_at(l.location))
+                                     : json(nullptr)}});
 
     json& ori = j["orientation"] = json::array();
     for (const auto& o : r.orientation) {
@@ -247,10 +274,9 @@ nlohmann::json to_json(const Report& r) {
         put_angle(e, "exact", o.uncertainty_rad, "_std");
         e["from_location"] = o.from_location;
         e["to_location"] = o.to_location;
-        e["tolerance_arcsec"] = opt(r.angle_tolerance_arcsec);
-        e["pass"] = r.angle_tolerance_arcsec && o.exact_rad
-                        ? json(std::abs(analysis::rad_to_arcsec(*o.exact_rad)) <= *r.angle_tolerance_arcsec)
-                        : json(nullptr);
+        const auto tol = r.angle_tolerance_for(o);
+        e["tolerance_arcsec"] = opt(tol);
+        e["pass"] = tol && o.exact_rad ? json(std::abs(analysis::rad_to_arcsec(*o.exact_rad)) <= *tol) : json(nullptr);
         ori.push_back(std::move(e));
     }
 

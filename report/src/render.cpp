@@ -3,6 +3,7 @@
 #include <cairo-pdf.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -76,11 +77,24 @@ void verdict_section(Document& doc, const Report& r) {
             7, kGrey);
         return;
     }
-    std::string limits;
-    if (r.location_tolerance_um) limits = "|ΔV| ≤ " + given(*r.location_tolerance_um) + " µm";
-    if (r.angle_tolerance_arcsec)
-        limits +=
-            (limits.empty() ? "" : ", ") + std::string("|Δα|, |Δβ|, |Δγ| ≤ ") + given(*r.angle_tolerance_arcsec) + "″";
+    // Each kind's tolerance as judged: one value, or the range of the tests' own.
+    std::optional<double> loc_lo, loc_hi, ang_lo, ang_hi;
+    auto widen = [](std::optional<double>& lo, std::optional<double>& hi, std::optional<double> tol) {
+        if (!tol) return;
+        lo = std::min(lo.value_or(*tol), *tol), hi = std::max(hi.value_or(*tol), *tol);
+    };
+    for (const auto& l : r.locations) widen(loc_lo, loc_hi, r.location_tolerance_at(l.location));
+    for (const auto& o : r.orientation)
+        if (o.exact_rad) widen(ang_lo, ang_hi, r.angle_tolerance_for(o));
+    const bool by_test = (loc_lo && *loc_lo != *loc_hi) || (ang_lo && *ang_lo != *ang_hi);
+    auto span = [](double lo, double hi, const char* unit) {
+        return lo == hi ? given(lo) + unit : given(lo) + "–" + given(hi) + unit;
+    };
+    std::string limits = by_test ? "by test: " : "";
+    if (loc_lo) limits += "|ΔV| ≤ " + span(*loc_lo, *loc_hi, " µm");
+    if (ang_lo)
+        limits += std::string(loc_lo ? ", " : "") + (by_test ? "angles ≤ " : "|Δα|, |Δβ|, |Δγ| ≤ ") +
+                  span(*ang_lo, *ang_hi, "″");
     if (v.pass)
         doc.verdict_line("PASS: all " + std::to_string(v.checked) + " figures within tolerance (" + limits + ")",
                          kPass);
@@ -90,11 +104,11 @@ void verdict_section(Document& doc, const Report& r) {
                          kFail);
     for (const std::string& f : v.failures) doc.paragraph("• " + f, 7.5, kFail);
     std::string source;  // "Tolerances: given." or "Tolerance on |ΔV|: given; on the angles: the machine file, ..."
-    if (r.location_tolerance_um && r.angle_tolerance_arcsec && r.location_tolerance_source == r.angle_tolerance_source)
+    if (loc_lo && ang_lo && r.location_tolerance_source == r.angle_tolerance_source)
         source = "Tolerances: " + r.location_tolerance_source;
-    else if (r.location_tolerance_um)
+    else if (loc_lo)
         source = "Tolerance on |ΔV|: " + r.location_tolerance_source +
-                 (r.angle_tolerance_arcsec ? "; on the angles: " + r.angle_tolerance_source : std::string());
+                 (ang_lo ? "; on the angles: " + r.angle_tolerance_source : std::string());
     else
         source = "Tolerance on the angles: " + r.angle_tolerance_source;
     doc.paragraph(source +

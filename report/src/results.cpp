@@ -270,22 +270,47 @@ void add_procedure(Report& r, std::string_view kind, const json& p) {
     r.procedure.push_back(e);
 }
 
-/// The stored plan: only its machine file's tolerances reach the report (the points come as points).
+/// The stored plan: only its tolerances reach the report (the points come as points): the machine
+/// file's, and each plan test's own.
 void add_plan(Report& r, const json& p) {
-    const json* machine = find(p, "machine");
-    const json* t = machine && machine->is_object() ? find(*machine, "tolerances") : nullptr;
-    if (!t || !t->is_object()) return;
-    auto positive = [&](const char* key) -> std::optional<double> {
-        const json* v = find(*t, key);
+    auto positive = [&](const json& t, const char* key) -> std::optional<double> {
+        const json* v = find(t, key);
         if (!v) return std::nullopt;
         if (!v->is_number() || !(v->get<double>() > 0) || !std::isfinite(v->get<double>()))
             bad(acquisition::kPlanResultKind, key, "must be a number > 0");
         return v->get<double>();
     };
-    if ((r.location_tolerance_um = positive("location_um")))
-        r.location_tolerance_source = "the machine file, stored with the session";
-    if ((r.angle_tolerance_arcsec = positive("angle_arcsec")))
-        r.angle_tolerance_source = "the machine file, stored with the session";
+    const json* machine = find(p, "machine");
+    if (const json* t = machine && machine->is_object() ? find(*machine, "tolerances") : nullptr; t && t->is_object()) {
+        if ((r.location_tolerance_um = positive(*t, "location_um")))
+            r.location_tolerance_source = "the machine file, stored with the session";
+        if ((r.angle_tolerance_arcsec = positive(*t, "angle_arcsec")))
+            r.angle_tolerance_source = "the machine file, stored with the session";
+    }
+    r.test_location_tolerance_um.clear(), r.test_angle_tolerance_arcsec.clear();
+    const json* plan = find(p, "plan");
+    const json* tests = plan && plan->is_object() ? find(*plan, "tests") : nullptr;
+    if (!tests || !tests->is_array()) return;
+    std::vector<int> own_location, own_angle;  // 1-based, as the screens number tests
+    for (const json& test : *tests) {
+        const json* t = test.is_object() ? find(test, "tolerances") : nullptr;
+        const bool has = t && t->is_object();
+        r.test_location_tolerance_um.push_back(has ? positive(*t, "location_um") : std::nullopt);
+        r.test_angle_tolerance_arcsec.push_back(has ? positive(*t, "angle_arcsec") : std::nullopt);
+        const int n = static_cast<int>(r.test_location_tolerance_um.size());
+        if (r.test_location_tolerance_um.back()) own_location.push_back(n);
+        if (r.test_angle_tolerance_arcsec.back()) own_angle.push_back(n);
+    }
+    // "the machine file, stored with the session; tests 2 and 3 their own, from the plan stored with the session".
+    auto with_own = [](std::string& source, bool machine_too, const std::vector<int>& own) {
+        std::string list = own.size() == 1 ? "test " : "tests ";
+        for (std::size_t i = 0; i < own.size(); ++i)
+            list += (i == 0 ? "" : i + 1 == own.size() ? " and " : ", ") + std::to_string(own[i]);
+        source = (machine_too ? source + "; " : std::string()) + list + (own.size() == 1 ? " its" : " their") +
+                 " own, from the plan stored with the session";
+    };
+    if (!own_location.empty()) with_own(r.location_tolerance_source, r.location_tolerance_um.has_value(), own_location);
+    if (!own_angle.empty()) with_own(r.angle_tolerance_source, r.angle_tolerance_arcsec.has_value(), own_angle);
 }
 
 bool add_known_result(Report& report, std::string_view kind, const nlohmann::json& payload) {

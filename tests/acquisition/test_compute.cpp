@@ -101,25 +101,41 @@ TEST(SsmVerdict, EachLocationAndMeasuredAngleIsJudgedAsMeasuredAndTheSummaryName
     t.orientation.exact = e;
 
     Tolerances none;
-    EXPECT_FALSE(judge_ssm(analysis::MachineType::TTTRR, none, {t}).judged());
-    EXPECT_EQ(judge_ssm(analysis::MachineType::TTTRR, none, {t}).summary(), "");
+    EXPECT_FALSE(judge_ssm(analysis::MachineType::TTTRR, none, {}, {t}).judged());
+    EXPECT_EQ(judge_ssm(analysis::MachineType::TTTRR, none, {}, {t}).summary(), "");
 
     Tolerances tol;
     tol.location_um = 30;
     tol.angle_arcsec = 30;
-    const SsmVerdict v = judge_ssm(analysis::MachineType::TTTRR, tol, {t});
+    const SsmVerdict v = judge_ssm(analysis::MachineType::TTTRR, tol, {}, {t});
     ASSERT_EQ(v.checks.size(), 4u);  // |ΔV1|, |ΔV2|, Δα, Δγ
     EXPECT_FALSE(v.pass());
     EXPECT_EQ(v.summary(), "FAIL: 1 of 4 beyond tolerance — test 2 Δα 41.00″ > 30″");
 
     tol.angle_arcsec = 45;
-    const SsmVerdict ok = judge_ssm(analysis::MachineType::TTTRR, tol, {t});
+    const SsmVerdict ok = judge_ssm(analysis::MachineType::TTTRR, tol, {}, {t});
     EXPECT_TRUE(ok.pass());
     EXPECT_EQ(ok.summary(), "PASS: |ΔV| within 30 µm at both locations; both orientation errors within 45″");
 
     // A singular orientation has no angle to judge; its locations still are.
-    t.orientation.exact.reset();
-    EXPECT_EQ(judge_ssm(analysis::MachineType::TTTRR, tol, {t}).checks.size(), 2u);
+    TestResult singular = t;
+    singular.orientation.exact.reset();
+    EXPECT_EQ(judge_ssm(analysis::MachineType::TTTRR, tol, {}, {singular}).checks.size(), 2u);
+
+    // A test's own tolerances (the plan's tests[].tolerances) replace the machine's for it alone.
+    TestResult first = t;
+    first.test = 0;
+    std::vector<TestSpec> plan(2);
+    plan[1].tolerances.location_um = 10;  // the second test's: its 12 µm and 30 µm fail; the first keeps 30 µm
+    const SsmVerdict own = judge_ssm(analysis::MachineType::TTTRR, tol, plan, {first, t});
+    ASSERT_EQ(own.checks.size(), 8u);
+    EXPECT_EQ(own.summary(),
+              "FAIL: 2 of 8 beyond tolerance — test 2 |ΔV1| 12.00 µm > 10 µm; test 2 |ΔV2| 30.00 µm > 10 µm");
+    plan[1].tolerances.location_um = 35;
+    plan[0].tolerances.angle_arcsec = 50;
+    EXPECT_EQ(judge_ssm(analysis::MachineType::TTTRR, tol, plan, {first, t}).summary(),
+              "PASS: |ΔV| within each test's tolerance (30 to 35 µm) at all 4 locations; all 4 orientation errors "
+              "within each test's tolerance (45 to 50″)");
 }
 
 }  // namespace

@@ -134,8 +134,27 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"rotation_1e308", R"("tests":[{"socket_mm":[0,0,0],"rotation_deg":{"A":1e308}}])",
              "rotation_deg.A = 1e+308"},
         Case{"confirm_not_boolean", kTests + R"(,"answers":{"confirm_setup":"yes"})",
-             "confirm_setup must be true or false"}),
+             "confirm_setup must be true or false"},
+        Case{"test_tolerance_zero",
+             R"("tests":[{"socket_mm":[0,0,0],"rotation_deg":{"A":10},"tolerances":{"location_um":0}}])",
+             "tests[0]: tolerances.location_um = 0"},
+        Case{"test_tolerance_circularity",
+             R"("tests":[{"socket_mm":[0,0,0],"rotation_deg":{"A":10},"tolerances":{"circularity_um":5}}])",
+             "tests[0]: tolerances: unknown key \"circularity_um\""}),
     [](const auto& param_info) { return std::string(param_info.param.name); });
+
+TEST(PlanFile, ATestsOwnTolerancesAreReadAndWrittenBack) {
+    const PlanSpec spec = parse_plan_file(
+        R"({"tests":[{"socket_mm":[0,0,-80],"rotation_deg":{"A":10},"tolerances":{"location_um":15}},
+                     {"socket_mm":[0,0,-80],"rotation_deg":{"C":30}}]})",
+        MachineType::TTTRR);
+    EXPECT_EQ(spec.tests[0].tolerances.location_um, 15.0);
+    EXPECT_FALSE(spec.tests[0].tolerances.angle_arcsec.has_value());
+    EXPECT_FALSE(spec.tests[1].tolerances.any());
+    const PlanSpec back = parse_plan_file(write_plan_file(spec, MachineType::TTTRR), MachineType::TTTRR);
+    EXPECT_EQ(back.tests[0].tolerances.location_um, 15.0);
+    EXPECT_FALSE(back.tests[1].tolerances.any());
+}
 
 TEST(PlanFile, TheProjectsOwnPlanFilesStayValid) {
     for (const char* f : {"tttrr-quick.plan.json", "tttrr-table2.plan.json", "tttrr-two-sockets.plan.json"}) {

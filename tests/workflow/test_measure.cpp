@@ -194,6 +194,62 @@ TEST(MeasureUseCase, TheMachineFilesTolerancesAreJudgedAtTheReviewAndReachTheRep
     EXPECT_EQ(report::ssm_verdict(given).failures.size(), angles_failed);
 }
 
+TEST(MeasureUseCase, APlanTestsOwnTolerancesReplaceTheMachinesForThatTestAtTheReviewAndInTheReport) {
+    Dir d;
+    storage::Store store((d.path / "m.db").string());
+    const fs::path program = d.path / "t.nc";
+    acq::MachineFile m = acq::parse_machine_file(slurp(kData / "tttrr.json"));
+    m.tolerances.location_um = 1;  // every location fails the machine's…
+    m.tolerances.angle_arcsec = 1;
+    acq::PlanSpec spec = acq::parse_plan_file(slurp(kData / "tttrr-quick.plan.json"), m.geometry.type);
+    spec.tests.push_back(spec.tests[0]);  // a second test at the same socket, C turned the other way
+    spec.tests[1].second_rad = -spec.tests[1].second_rad;
+    spec.tests[0].tolerances.location_um = 5000;  // …but the first test has lenient ones of its own
+    spec.tests[0].tolerances.angle_arcsec = 30000;
+    spec = acq::parse_plan_file(acq::write_plan_file(spec, m.geometry.type), m.geometry.type);  // as a file would
+    const PreparedSession s = new_ssm_session(store, acq::make_plan(m, spec), d.device(program));
+    ReviewingOperator op(s.plan, program);
+    const acq::SessionSummary sum = measure_ssm(store, s, op, simulated(d, program));
+    ASSERT_EQ(sum.final_state, acq::State::Done) << sum.reason;
+
+    // Recomputed from the stored results: the first test's figures pass, every other test's fail.
+    std::size_t checked = 0, failed = 0;
+    for (const auto& r : store.results(s.id)) {
+        if (r.kind == acq::kSsmResultKind) {
+            const acq::LocationResult l = acq::location_from_json(r.payload_json);
+            ++checked;
+            failed += l.dV_mm.norm() * 1e3 > (l.test == 0 ? 5000 : 1) ? 1 : 0;
+        } else if (r.kind == acq::kOrientationResultKind) {
+            const acq::TestResult t = acq::test_from_json(r.payload_json);
+            ASSERT_TRUE(t.orientation.exact.has_value());
+            const auto angles = acq::measured_angles(m.geometry.type, t.kind);
+            const auto& e = *t.orientation.exact;
+            for (auto [on, rad] : {std::pair{angles.alpha, e.d_alpha_rad}, std::pair{angles.beta, e.d_beta_rad},
+                                   std::pair{angles.gamma, e.d_gamma_rad}})
+                if (on) ++checked, failed += std::abs(analysis::rad_to_arcsec(rad)) > (t.test == 0 ? 30000 : 1) ? 1 : 0;
+        }
+    }
+    ASSERT_GT(failed, 0u);
+    ASSERT_LT(failed, checked);
+    EXPECT_NE(op.review.find("FAIL: " + std::to_string(failed) + " of " + std::to_string(checked)), std::string::npos)
+        << op.review;
+    EXPECT_EQ(op.review.find("test 1 "), std::string::npos) << "the first test judged by the machine's: " << op.review;
+
+    const report::Report r = report::build_report(store, s.id);
+    const report::SsmVerdict v = report::ssm_verdict(r);
+    EXPECT_EQ(v.checked, checked);
+    EXPECT_EQ(v.failures.size(), failed);
+    const auto j = report::to_json(r);
+    EXPECT_EQ(j["locations"][0]["tolerance_um"], 5000.0);
+    EXPECT_EQ(j["locations"][2]["tolerance_um"], 1.0);
+    EXPECT_EQ(r.location_tolerance_source,
+              "the machine file, stored with the session; test 1 its own, from the plan stored with the session");
+    // A tolerance given at report time is for every test.
+    report::Report given = r;
+    report::set_ssm_tolerances(given, 1.0, 1.0);
+    EXPECT_EQ(report::ssm_verdict(given).failures.size(), checked);
+}
+
 TEST(MeasureUseCase, AStoppedRunIsTakenUpAfterItsLastPoint) {
     Dir d;
     storage::Store store((d.path / "m.db").string());

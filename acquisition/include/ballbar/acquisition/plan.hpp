@@ -36,6 +36,9 @@ struct TestSpec {
     double first_rad = 0;                               ///< the type's first rotary axis: A
     double second_rad = 0;                              ///< the second: B (RRTTT, RTTTR) or C (TTTRR)
     TestKind kind = TestKind::BothAxes;
+    /// This test's own tolerances (plan file `tests[].tolerances`: location_um, angle_arcsec), each in
+    /// place of the machine file's for this test only; none given: the machine's.
+    Tolerances tolerances;
 };
 
 enum class PointFailureAction { Retry, Accept, Abort };

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// An SSM session's results judged against the machine's tolerances (machine file `tolerances`): each
+// An SSM session's results judged against the tolerances (the plan test's own, else the machine file's): each
 // location's |ΔV| against location_um, each measured orientation error (exact) against angle_arcsec.
 // The same rule as the report's (report::set_ssm_tolerances): the value itself, its uncertainty shown
 // beside it, not subtracted. docs/procedure.md.
@@ -10,6 +10,7 @@
 
 #include "ballbar/acquisition/interfaces.hpp"
 #include "ballbar/acquisition/machine_file.hpp"
+#include "ballbar/acquisition/plan.hpp"
 #include "ballbar/analysis/types.hpp"
 
 namespace ballbar::acquisition {
@@ -32,6 +33,9 @@ struct SsmVerdict {
     std::string summary() const;
 };
 
-SsmVerdict judge_ssm(analysis::MachineType type, const Tolerances& tolerances, const std::vector<TestResult>& tests);
+/// Judges each test against its own tolerances (the plan's `tests[].tolerances`), else the machine's:
+/// `plan_tests` indexed by TestResult::test.
+SsmVerdict judge_ssm(analysis::MachineType type, const Tolerances& machine, const std::vector<TestSpec>& plan_tests,
+                     const std::vector<TestResult>& tests);
 
 }  // namespace ballbar::acquisition

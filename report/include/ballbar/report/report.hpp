@@ -218,6 +218,14 @@ struct Report {
     /// plan, or given (set_ssm_tolerances); none: no verdict. Each with where it came from.
     std::optional<double> location_tolerance_um, angle_tolerance_arcsec;
     std::string location_tolerance_source, angle_tolerance_source;  ///< "machine file" or "given"
+    /// A plan test's own tolerances (the stored plan's tests[].tolerances), by test (0-based: locations
+    /// 2t and 2t + 1), each in place of the one above for that test; a value given replaces them all.
+    std::vector<std::optional<double>> test_location_tolerance_um, test_angle_tolerance_arcsec;
+    /// The tolerance a location (LocationError::location) is judged against; none: not judged.
+    std::optional<double> location_tolerance_at(int location) const;
+    /// The tolerance an orientation error is judged against: its test's own when both its locations are
+    /// that test's, else the machine's.
+    std::optional<double> angle_tolerance_for(const OrientationError& o) const;
 };
 
 /// The SSM results against the tolerances: each judged figure beyond its tolerance, in words.
