@@ -21,6 +21,7 @@
 #include "ballbar/acquisition/circular_session.hpp"
 #include "ballbar/acquisition/machine_file.hpp"
 #include "ballbar/device/emulator_host.hpp"
+#include "ballbar/device/gauge.hpp"
 #include "ballbar/device/uri.hpp"
 #include "ballbar/report/build.hpp"
 #include "ballbar/report/report.hpp"
@@ -296,7 +297,8 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     const workflow::CircularMeasureResult run = workflow::measure_circular(store, prepared, op, mo);
     workflow::throw_unless_completed(
         run.summary, run.session_id,
-        resume_command("circular", run.session_id.value_or(0), globals.db_path, o.device, o.program_file));
+        resume_command("circular", run.session_id.value_or(0), globals.db_path,
+                       device::gauge::hinted_device(run.summary.reason).value_or(o.device), o.program_file));
     const std::int64_t id = *run.session_id;
     const workflow::StoredCircularResult& stored = *run.stored;
     if (o.json) {

@@ -233,7 +233,9 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         throw Error(ErrorCategory::interrupted,
                     "session " + std::to_string(id) + " interrupted after " + std::to_string(sum.samples) +
                         " samples (" + sum.reason + "); everything measured is stored" + retry +
-                        ". Continue it with: " + resume_command("ssm", id, globals.db_path, o.device, o.program_file));
+                        ". Continue it with: " +
+                        resume_command("ssm", id, globals.db_path,
+                                       device::gauge::hinted_device(sum.reason).value_or(o.device), o.program_file));
     }
     if (sum.final_state == acq::State::Done) {
         if (o.json) {

@@ -102,6 +102,13 @@ TEST_P(GaugeCli, ASerialUriOnAGaugeSaysWhichGaugeAnswersThere) {
         << r.err;
     const auto ok = ballbar::test::run(dir, "monitor --device " + GetParam() + ":" + path + " --seconds 0.5 --json");
     EXPECT_EQ(ok.code, 0) << ok.err;
+    // `measure` stops the same way, and its resume line names the device that answers, not serial: again.
+    const std::string data = std::string(BALLBAR_TEST_DATA_DIR) + "/machines/";
+    const auto m = ballbar::test::run(dir, "measure --non-interactive --device serial:" + path + " --machine " + data +
+                                               "tttrr.json --plan " + data + "tttrr-quick.plan.json --program '" +
+                                               dir.file("g.nc") + "'");
+    EXPECT_NE(m.code, 0) << m.err;
+    EXPECT_NE(m.err.find("measure --resume 1 --device " + GetParam() + ":" + path), std::string::npos) << m.err;
 }
 
 // `ballbar measure` on a gauge behind `ballbar emulate --instrument KIND --pty`, as two processes: it

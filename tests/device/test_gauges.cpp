@@ -262,3 +262,12 @@ TEST(SlowGauge, MaxFeedForRate) {
 
 }  // namespace
 }  // namespace ballbar::device::gauge
+
+TEST(GaugeHint, TheResumeLineTakesTheDeviceTheHintNames) {
+    using ballbar::device::gauge::hinted_device;
+    EXPECT_EQ(hinted_device("cannot open the instrument: serial:/dev/ttyUSB0: no answer to Identify within 500 ms; a "
+                            "sylvac gauge answers on /dev/ttyUSB0: use --device sylvac:/dev/ttyUSB0"),
+              "sylvac:/dev/ttyUSB0");
+    EXPECT_EQ(hinted_device("(…: use --device modbus:/dev/ttyS0); everything measured is stored"), "modbus:/dev/ttyS0");
+    EXPECT_FALSE(hinted_device("cannot open the instrument: no answer to Identify").has_value());
+}

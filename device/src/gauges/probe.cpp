@@ -38,7 +38,16 @@ std::string serial_gauge_hint(std::string_view uri) {
     const auto kind = find_serial_gauge(path, std::chrono::milliseconds(250));
     if (!kind) return {};
     const std::string scheme = to_string(*kind);
-    return "; a " + scheme + " gauge answers on " + path + ": use --device " + scheme + ":" + path;
+    return "; a " + scheme + " gauge answers on " + path + std::string(kUseDevice) + scheme + ":" + path;
+}
+
+std::optional<std::string> hinted_device(std::string_view message) {
+    const auto at = message.find(kUseDevice);
+    if (at == std::string_view::npos) return std::nullopt;
+    std::string_view uri = message.substr(at + kUseDevice.size());
+    uri = uri.substr(0, uri.find_first_of(" ;)"));  // the URI ends the hint; a message may go on after it
+    if (uri.empty()) return std::nullopt;
+    return std::string(uri);
 }
 
 }  // namespace ballbar::device::gauge

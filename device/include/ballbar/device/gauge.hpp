@@ -121,6 +121,10 @@ std::optional<Kind> find_serial_gauge(const std::string& path, std::chrono::mill
 /// --device sylvac:PATH" when one does (find_serial_gauge: two requests of 250 ms per protocol, 1.5 s at most), else
 /// "".
 std::string serial_gauge_hint(std::string_view uri);
+inline constexpr std::string_view kUseDevice = ": use --device ";
+/// The device a serial_gauge_hint in `message` names ("sylvac:/dev/ttyUSB0"), wherever in the message it
+/// stands; none without one. For the resume line of a session stopped by it: the device that answers.
+std::optional<std::string> hinted_device(std::string_view message);
 
 std::unique_ptr<Gauge> make_sylvac_gauge(std::unique_ptr<Transport> link);
 std::unique_ptr<Gauge> make_digimatic_gauge(std::unique_ptr<Transport> link);
