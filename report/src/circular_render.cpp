@@ -316,6 +316,10 @@ void polar_plot(Document& doc, const CircularTest& c) {
         "Each run: its data arc only, reduced to first/min/max/last per angle column (720 per run).",
     };
     std::vector<std::string> all_notes = notes;
+    if (!model && !c.runs.empty())
+        all_notes.push_back(
+            "No model curve: this result was stored before ballbar drew one (`ballbar circle analyze SESSION "
+            "--store` stores the analysis again, with it).");
     if (model)
         all_notes.push_back(
             "Model (dashed): every diagnosed effect of the path together (all but the vibration, which widens "
