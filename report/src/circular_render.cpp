@@ -179,31 +179,27 @@ void polar_plot(Document& doc, const CircularTest& c) {
     for (std::size_t k = 0; k < c.runs.size(); ++k) {
         const auto& run = c.runs[k];
         if (run.angle_deg.size() < 2) continue;
-        set_color(cr, palette(k == 0 ? 0 : 1));
-        cairo_set_line_width(cr, 0.7);
-        cairo_new_path(cr);
-        for (std::size_t i = 0; i < run.angle_deg.size(); ++i) {
-            const auto [x, y] = at(run.angle_deg[i], rho(run.deviation_um[i]));
-            if (i == 0)
-                cairo_move_to(cr, x, y);
-            else
-                cairo_line_to(cr, x, y);
-        }
-        cairo_stroke(cr);
-        if (run.model_angle_deg.size() >= 2 && run.model_angle_deg.size() == run.model_deviation_um.size()) {
-            set_color(cr, model_colour(k));
-            cairo_set_line_width(cr, 0.9);
-            const double dash[] = {3.0, 2.0};
-            cairo_set_dash(cr, dash, 2, 0);
+        // One polyline through (angle, deviation) pairs, stroked.
+        auto stroke_curve = [&](const std::vector<double>& angles, const std::vector<double>& deviations) {
             cairo_new_path(cr);
-            for (std::size_t i = 0; i < run.model_angle_deg.size(); ++i) {
-                const auto [x, y] = at(run.model_angle_deg[i], rho(run.model_deviation_um[i]));
+            for (std::size_t i = 0; i < angles.size(); ++i) {
+                const auto [x, y] = at(angles[i], rho(deviations[i]));
                 if (i == 0)
                     cairo_move_to(cr, x, y);
                 else
                     cairo_line_to(cr, x, y);
             }
             cairo_stroke(cr);
+        };
+        set_color(cr, palette(k == 0 ? 0 : 1));
+        cairo_set_line_width(cr, 0.7);
+        stroke_curve(run.angle_deg, run.deviation_um);
+        if (run.model_angle_deg.size() >= 2 && run.model_angle_deg.size() == run.model_deviation_um.size()) {
+            set_color(cr, model_colour(k));
+            cairo_set_line_width(cr, 0.9);
+            const double dash[] = {3.0, 2.0};
+            cairo_set_dash(cr, dash, 2, 0);
+            stroke_curve(run.model_angle_deg, run.model_deviation_um);
             cairo_set_dash(cr, nullptr, 0, 0);
             set_color(cr, palette(k == 0 ? 0 : 1));
         }
