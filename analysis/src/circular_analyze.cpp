@@ -62,33 +62,42 @@ void model_curves(const detail::FitInput& in, const detail::FitOutput& fit, doub
                   p.sin_theta * cos_lag - p.dir * p.cos_theta * sin_lag};
     }
     const Eigen::Vector3d c = least_squares_circle(pts.data(), pts.data() + n);
+    // One pass over the points: each one's deviation about that circle, and per run and column the
+    // indices of the lowest and highest point.
+    constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+    std::vector<double> dev(n);
+    std::vector<std::vector<std::size_t>> lo(result.runs.size()), hi(result.runs.size());
+    for (std::size_t k = 0; k < result.runs.size(); ++k) {
+        const auto columns =
+            static_cast<std::size_t>(std::ceil(result.test.runs[k].data_arc_deg / kModelCurveStep_deg));
+        lo[k].assign(columns, kNone), hi[k].assign(columns, kNone);
+    }
+    auto arc_deg = [&](std::size_t i) {
+        return in.points[i].travelled / kDeg -
+               result.test.runs[static_cast<std::size_t>(in.points[i].run)].overshoot_deg;
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+        const AnglePoint& p = pts[i];
+        dev[i] = p.y_um - (c[0] + c[1] * p.c + c[2] * p.s);
+        const auto k = static_cast<std::size_t>(in.points[i].run);
+        auto& l = lo[k];
+        auto& h = hi[k];
+        const auto col = static_cast<std::size_t>(
+            std::clamp(std::floor(arc_deg(i) / kModelCurveStep_deg), 0.0, static_cast<double>(l.size() - 1)));
+        if (l[col] == kNone || dev[i] < dev[l[col]]) l[col] = i;
+        if (h[col] == kNone || dev[i] > dev[h[col]]) h[col] = i;
+    }
     for (std::size_t k = 0; k < result.runs.size(); ++k) {
         RunResult& run = result.runs[k];
-        const RunSpec& spec = result.test.runs[k];
-        const auto columns = static_cast<std::size_t>(std::ceil(spec.data_arc_deg / kModelCurveStep_deg));
-        // Per column the indices of its lowest and highest point.
-        constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-        std::vector<std::size_t> lo(columns, kNone), hi(columns, kNone);
-        std::vector<double> dev(n, 0.0);
-        for (std::size_t i = 0; i < n; ++i) {
-            if (in.points[i].run != static_cast<int>(k)) continue;
-            const AnglePoint& p = pts[i];
-            dev[i] = p.y_um - (c[0] + c[1] * p.c + c[2] * p.s);
-            const double arc = in.points[i].travelled / kDeg - spec.overshoot_deg;
-            const auto col = static_cast<std::size_t>(
-                std::clamp(std::floor(arc / kModelCurveStep_deg), 0.0, static_cast<double>(columns - 1)));
-            if (lo[col] == kNone || dev[i] < dev[lo[col]]) lo[col] = i;
-            if (hi[col] == kNone || dev[i] > dev[hi[col]]) hi[col] = i;
-        }
         run.model_arc_deg.clear(), run.model_deviation_um.clear();
         auto add = [&](std::size_t i) {
-            run.model_arc_deg.push_back(in.points[i].travelled / kDeg - spec.overshoot_deg);
+            run.model_arc_deg.push_back(arc_deg(i));
             run.model_deviation_um.push_back(dev[i]);
         };
-        for (std::size_t col = 0; col < columns; ++col) {
-            if (lo[col] == kNone) continue;
-            add(std::min(lo[col], hi[col]));
-            if (lo[col] != hi[col]) add(std::max(lo[col], hi[col]));
+        for (std::size_t col = 0; col < lo[k].size(); ++col) {
+            if (lo[k][col] == kNone) continue;
+            add(std::min(lo[k][col], hi[k][col]));
+            if (lo[k][col] != hi[k][col]) add(std::max(lo[k][col], hi[k][col]));
         }
     }
 }

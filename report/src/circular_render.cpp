@@ -16,6 +16,9 @@ namespace ballbar::report {
 
 namespace {
 
+/// The diagnosed model's dash, on the plot and in its legend.
+constexpr double kModelDash[] = {3.0, 2.0};
+
 std::string um(double v) {
     return fixed(v, kUmDecimals) + " µm";
 }
@@ -197,8 +200,7 @@ void polar_plot(Document& doc, const CircularTest& c) {
         if (run.model_angle_deg.size() >= 2 && run.model_angle_deg.size() == run.model_deviation_um.size()) {
             set_color(cr, model_colour(k));
             cairo_set_line_width(cr, 0.9);
-            const double dash[] = {3.0, 2.0};
-            cairo_set_dash(cr, dash, 2, 0);
+            cairo_set_dash(cr, kModelDash, 2, 0);
             stroke_curve(run.model_angle_deg, run.model_deviation_um);
             cairo_set_dash(cr, nullptr, 0, 0);
             set_color(cr, palette(k == 0 ? 0 : 1));
@@ -269,8 +271,7 @@ void polar_plot(Document& doc, const CircularTest& c) {
         model = true;
         set_color(cr, model_colour(k));
         cairo_set_line_width(cr, 1.2);
-        const double dash[] = {3.0, 2.0};
-        cairo_set_dash(cr, dash, 2, 0);
+        cairo_set_dash(cr, kModelDash, 2, 0);
         cairo_move_to(cr, lx, y + 4);
         cairo_line_to(cr, lx + 16, y + 4);
         cairo_stroke(cr);

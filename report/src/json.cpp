@@ -246,7 +246,8 @@ nlohmann::json to_json(const Report& r) {
                         {"detail", text(e.detail)}});
 
     json& locs = j["locations"] = json::array();
-    for (const auto& l : r.locations)
+    for (const auto& l : r.locations) {
+        const auto tol = r.location_tolerance_at(l.location);
         locs.push_back({{"location", l.location},
                         {"label", l.label},
                         {"position_mm", vec(l.position_mm)},
@@ -256,10 +257,9 @@ nlohmann::json to_json(const Report& r) {
                         {"points", l.points},
                         {"residual_rms_um", opt(l.residual_rms_um)},
                         {"condition_number", opt(l.condition)},
-                        {"tolerance_um", opt(r.location_tolerance_at(l.location))},
-                        {"pass", r.location_tolerance_at(l.location)
-                                     ? json(l.error_um.norm() <= *r.location_tolerance_at(l.location))
-                                     : json(nullptr)}});
+                        {"tolerance_um", opt(tol)},
+                        {"pass", tol ? json(l.error_um.norm() <= *tol) : json(nullptr)}});
+    }
 
     json& ori = j["orientation"] = json::array();
     for (const auto& o : r.orientation) {
