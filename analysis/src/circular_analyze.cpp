@@ -26,15 +26,17 @@ struct AnglePoint {
 
 /// The least-squares circle of the points [begin, end) (at least 3): mean radial deviation and the
 /// centre's offset, as the coefficients of 1, cos θ and sin θ.
+/// The normal equations' sums are plain doubles (the 3×3 is symmetric: six of them), not an Eigen outer
+/// product per point, which a sanitizer build makes a dozen function calls.
 Eigen::Vector3d least_squares_circle(const AnglePoint* begin, const AnglePoint* end) {
-    Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    double n = 0, sc = 0, ss = 0, scc = 0, scs = 0, sss = 0, sy = 0, syc = 0, sys = 0;
     for (const AnglePoint* p = begin; p != end; ++p) {
-        const Eigen::Vector3d row(1.0, p->c, p->s);
-        a += row * row.transpose();
-        b += row * p->y_um;
+        n += 1.0, sc += p->c, ss += p->s, scc += p->c * p->c, scs += p->c * p->s, sss += p->s * p->s;
+        sy += p->y_um, syc += p->c * p->y_um, sys += p->s * p->y_um;
     }
-    return a.ldlt().solve(b);
+    Eigen::Matrix3d a;
+    a << n, sc, ss, sc, scc, scs, ss, scs, sss;
+    return a.ldlt().solve(Eigen::Vector3d(sy, syc, sys));
 }
 
 /// Max − min radial deviation of the points [begin, end) about the circle `c` (least_squares_circle's).

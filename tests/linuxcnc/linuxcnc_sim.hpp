@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Runs LinuxCNC's headless simulator (tests/linuxcnc/sim/) on one program with a given kinematics
 // line and reads what its sampler recorded every servo cycle. LinuxCNC runs one instance per machine
-// (a global lock, fixed shared-memory keys): the tests that use this run serially (ctest RUN_SERIAL).
+// (a global lock, fixed shared-memory keys): the tests that use this run one at a time (a ctest
+// RESOURCE_LOCK, tests/CMakeLists.txt).
 //
 // LinuxCNC 2.9 as Debian packages it loads modules only from /usr/lib/linuxcnc/modules/NAME.so; a copy
 // of the build's module in the run's directory is linked there as `ballbarkins.so` (a symbolic link the
