@@ -179,6 +179,17 @@ void SimulatedMachine::stop(double t_s) {
 
 Pose SimulatedMachine::pose_locked(double t_s) {
     now_s_ = std::max(now_s_, t_s);
+    if (follow_) {
+        const std::optional<Pose> p = follow_->pose_at(now_s_);
+        if (p && keep_history_) {
+            const auto& c = current_;
+            if (p->X_mm != c.X_mm || p->Y_mm != c.Y_mm || p->Z_mm != c.Z_mm || p->A_rad != c.A_rad ||
+                p->B_rad != c.B_rad || p->C_rad != c.C_rad)
+                history_.push_back({*p, *p, now_s_, now_s_});  // a step: the pose from now on
+        }
+        if (p) current_ = *p;
+        return current_;
+    }
     while (!queue_.empty() && queue_.front().t1 <= now_s_) {
         current_ = queue_.front().to;
         if (keep_history_) history_.push_back(queue_.front());

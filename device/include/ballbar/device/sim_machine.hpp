@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string_view>
@@ -23,6 +24,14 @@
 #include "ballbar/analysis/types.hpp"
 
 namespace ballbar::device {
+
+/// Where a machine stands, told from outside: a controller's joint commands (trajectory.hpp).
+class PoseSource {
+  public:
+    virtual ~PoseSource() = default;
+    /// The pose at the emulator's time `t_s` (non-decreasing); empty while the source knows none yet.
+    virtual std::optional<analysis::Pose> pose_at(double t_s) = 0;
+};
 
 struct MachineSetup {
     analysis::MachineGeometry geometry;
@@ -98,6 +107,14 @@ class SimulatedMachine {
     void set_feed_override(double factor);
     double feed_override() const { return feed_override_; }
 
+    /// From now on the machine stands wherever `source` says (a controller drives it): its own motion
+    /// queue and programs are no longer used; socket moves and the history still are. Before the source
+    /// knows a pose the machine stands where it stood.
+    void follow(std::shared_ptr<PoseSource> source) {
+        std::lock_guard lock(mutex_);
+        follow_ = std::move(source);
+    }
+
     /// Commanded pose at time `t_s` (must not go backwards between calls).
     analysis::Pose pose_at(double t_s);
     /// The time the motion queued so far ends (≤ now when idle).
@@ -127,6 +144,7 @@ class SimulatedMachine {
         std::size_t next = 0;  ///< first block after the stop
         double feed = 0;       ///< modal feed at the stop
     };
+    std::shared_ptr<PoseSource> follow_;
     std::optional<Held> held_;
     double feed_override_ = 1.0;
     bool keep_history_ = false;
