@@ -26,6 +26,7 @@
 #include "circle_measure.hpp"  // demo --test circular
 #include "command.hpp"
 #include "compensation_demo.hpp"
+#include "demo_linuxcnc.hpp"  // demo --controller linuxcnc (issue 29)
 #include "figures.hpp"
 #include "files.hpp"
 #include "gauge_commands.hpp"  // demo --instrument: a digital gauge (issue 14)
@@ -52,6 +53,10 @@ struct DemoOptions {
     std::string plane = "XY";
     double arc_deg = 0;
     acq::Tolerances tolerances;  ///< --location-tolerance, --angle-tolerance: the SSM's verdict
+    std::string controller;      ///< --controller linuxcnc: the loop through LinuxCNC (demo_linuxcnc.cpp)
+    std::string work_dir;
+    std::string module;
+    int error_set = 0;
 };
 
 /// The angles of one orientation entry in arcseconds ("d_alpha -46.66\""): those under `prefix` + name
@@ -101,6 +106,8 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
             throw as_error(e);
         }
     }
+    if (o.controller == "linuxcnc")
+        return run_linuxcnc_demo({o.seed, o.json, o.work_dir, o.module, o.error_set, o.plan}, globals);
     if (o.test == "circular")
         return run_circular_demo({o.seed, o.json, o.plane, o.arc_deg, 100.0, 1000.0, o.faults, o.report}, globals);
     if (!o.instrument.empty() && o.instrument != "ballbar")
@@ -297,6 +304,17 @@ BALLBAR_COMMAND(demo) {
     sub->add_option("--plane", o->plane, "--test circular: XY, YZ or ZX")->check(CLI::IsMember({"XY", "YZ", "ZX"}));
     sub->add_option("--arc", o->arc_deg, "--test circular: data arc, degrees (default 360 in XY, 180 in YZ and ZX)")
         ->check(in_range(30, 360, "°"));
+    sub->add_option("--controller", o->controller,
+                    "linuxcnc: the whole loop through LinuxCNC's simulator (measure, identify, compensate in "
+                    "ballbarkins, measure again; docs/linuxcnc.md)")
+        ->check(CLI::IsMember({"linuxcnc"}));
+    sub->add_option("--work-dir", o->work_dir,
+                    "--controller linuxcnc: a new directory for LinuxCNC's configuration, programs, model and logs");
+    sub->add_option("--module", o->module,
+                    "--controller linuxcnc: a build tree's ballbarkins.so (linked into LinuxCNC's modules; root)");
+    sub->add_option("--error-set", o->error_set,
+                    "--controller linuxcnc: 0 (default) the demo machine's errors, K > 0 random ones of that size")
+        ->check(CLI::Range(0, 1000000));
     sub->add_option("--location-tolerance", o->tolerances.location_um,
                     "SSM: |ΔV| allowed at each location, µm: a PASS/FAIL verdict (stored with the session)")
         ->check(in_range(0, 10000, "µm", true));

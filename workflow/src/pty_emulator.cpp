@@ -9,9 +9,9 @@
 
 namespace ballbar::workflow {
 
-PtyEmulator::PtyEmulator(device::EmulatorConfig config) : emu_(std::move(config)) {
+PtyEmulator::PtyEmulator(device::EmulatorConfig config, device::Pacing pacing) : emu_(std::move(config)) {
     device::HostOptions ho;
-    ho.pacing = device::Pacing::Simulated;
+    ho.pacing = pacing;
     ho.stop = &stop_;
     host_ = std::make_unique<device::EmulatorHost>(emu_, ho);
     thread_ = std::thread([this] {

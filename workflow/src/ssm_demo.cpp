@@ -67,7 +67,8 @@ class FrontAtMachine : public acq::Operator {
 
 }  // namespace
 
-TruthCheck check_against_truth(storage::Store& store, std::int64_t id, const device::Emulator& emu) {
+TruthCheck check_against_truth(storage::Store& store, std::int64_t id, const device::Emulator& emu, double linear_mm,
+                               double angle_rad) {
     TruthCheck c;
     const device::SimulatedMachine& m = emu.machine();
     const auto samples = store.samples(id);
@@ -89,9 +90,9 @@ TruthCheck check_against_truth(storage::Store& store, std::int64_t id, const dev
         for (std::uint64_t q = *p.first_seq; q <= *p.last_seq && ok; ++q) {
             const double t_s = static_cast<double>(samples[static_cast<std::size_t>(q)].device_time_us) * 1e-6;
             const auto t = m.truth_at(t_s);
-            ok = t && (t->pose.linear_mm() - want.linear_mm()).norm() < 1e-4 &&
-                 std::abs(t->pose.A_rad - want.A_rad) < 1e-6 && std::abs(t->pose.B_rad - want.B_rad) < 1e-6 &&
-                 std::abs(t->pose.C_rad - want.C_rad) < 1e-6 && (t->socket_mm - p.reading.socket_mm).norm() < 1e-6;
+            ok = t && (t->pose.linear_mm() - want.linear_mm()).norm() < linear_mm &&
+                 std::abs(t->pose.A_rad - want.A_rad) < angle_rad && std::abs(t->pose.B_rad - want.B_rad) < angle_rad &&
+                 std::abs(t->pose.C_rad - want.C_rad) < angle_rad && (t->socket_mm - p.reading.socket_mm).norm() < 1e-6;
             if (!ok) {
                 std::ostringstream os;
                 os << "sample " << q << " at " << t_s << " s: ";

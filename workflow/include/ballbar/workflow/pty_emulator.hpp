@@ -18,7 +18,9 @@ namespace ballbar::workflow {
 
 class PtyEmulator {
   public:
-    explicit PtyEmulator(device::EmulatorConfig config);
+    /// `pacing`: simulated time (as fast as the session reads: the demos), or the wall clock (a machine
+    /// driven by a real controller, which runs in real time).
+    explicit PtyEmulator(device::EmulatorConfig config, device::Pacing pacing = device::Pacing::Simulated);
     ~PtyEmulator();
     PtyEmulator(const PtyEmulator&) = delete;
     PtyEmulator& operator=(const PtyEmulator&) = delete;

@@ -65,8 +65,11 @@ struct TruthCheck {
     std::size_t samples_stored = 0;
     std::string first_wrong;  ///< the first wrong point, for the message
 };
-/// Needs the machine's history (SimulatedMachine::keep_history before the session).
-TruthCheck check_against_truth(storage::Store& store, std::int64_t session_id, const device::Emulator& emulator);
+/// Needs the machine's history (SimulatedMachine::keep_history before the session). A sample is at its
+/// point's pose when within `linear_mm` and `angle_rad` of it (a machine that compensates stands a
+/// correction away from the planned pose; the neighbouring dwells of a point are 0.45 mm away or more).
+TruthCheck check_against_truth(storage::Store& store, std::int64_t session_id, const device::Emulator& emulator,
+                               double linear_mm = 1e-4, double angle_rad = 1e-6);
 
 struct SsmDemoOptions {
     analysis::MachineType machine = analysis::MachineType::TTTRR;
