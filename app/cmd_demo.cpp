@@ -57,6 +57,8 @@ struct DemoOptions {
     std::string work_dir;
     std::string module;
     int error_set = 0;
+    std::string hidden;     ///< --hidden EFFECT (--controller linuxcnc)
+    bool discover = false;  ///< --discover (--controller linuxcnc)
 };
 
 /// The angles of one orientation entry in arcseconds ("d_alpha -46.66\""): those under `prefix` + name
@@ -107,7 +109,8 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         }
     }
     if (o.controller == "linuxcnc")
-        return run_linuxcnc_demo({o.seed, o.json, o.work_dir, o.module, o.error_set, o.plan}, globals);
+        return run_linuxcnc_demo(
+            {o.seed, o.json, o.work_dir, o.module, o.error_set, o.plan, o.hidden, o.discover, o.report}, globals);
     if (o.test == "circular")
         return run_circular_demo({o.seed, o.json, o.plane, o.arc_deg, 100.0, 1000.0, o.faults, o.report}, globals);
     if (!o.instrument.empty() && o.instrument != "ballbar")
@@ -315,6 +318,12 @@ BALLBAR_COMMAND(demo) {
     sub->add_option("--error-set", o->error_set,
                     "--controller linuxcnc: 0 (default) the demo machine's errors, K > 0 random ones of that size")
         ->check(CLI::Range(0, 1000000));
+    sub->add_flag("--discover", o->discover,
+                  "--controller linuxcnc: then the discovery workflow on the first session; what it names goes "
+                  "into ballbarkins with the model and the SSM is measured a third time");
+    sub->add_option("--hidden", o->hidden,
+                    "--controller linuxcnc: an effect outside the model in the emulated machine, at a typical "
+                    "size (an id of docs/discovery.md's library, e.g. squareness_XY); implies --discover");
     sub->add_option("--location-tolerance", o->tolerances.location_um,
                     "SSM: |ΔV| allowed at each location, µm: a PASS/FAIL verdict (stored with the session)")
         ->check(in_range(0, 10000, "µm", true));

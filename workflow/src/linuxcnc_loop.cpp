@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -27,14 +28,19 @@
 #include <sstream>
 #include <thread>
 
+#include "ballbar/acquisition/circle_program.hpp"
 #include "ballbar/acquisition/compute.hpp"
 #include "ballbar/acquisition/result_codec.hpp"
 #include "ballbar/acquisition/session.hpp"
+#include "ballbar/analysis/effects.hpp"
+#include "ballbar/analysis/kinematics.hpp"
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/device/trajectory.hpp"
 #include "ballbar/device/uri.hpp"
 #include "ballbar/storage/compensation_codec.hpp"
 #include "ballbar/storage/model_codec.hpp"
+#include "ballbar/workflow/circular_measure.hpp"
+#include "ballbar/workflow/discover.hpp"
 #include "ballbar/workflow/error.hpp"
 #include "ballbar/workflow/identify.hpp"
 #include "ballbar/workflow/pty_emulator.hpp"
@@ -48,13 +54,15 @@ namespace ballbar::workflow {
 
 namespace acq = ballbar::acquisition;
 namespace ba = ballbar::analysis;
+namespace circ = ballbar::analysis::circular;
 namespace fs = std::filesystem;
 
 namespace {
 
 constexpr const char* kModuleDir = "/usr/lib/linuxcnc/modules";
-constexpr unsigned kRtapiUid = 65534;
-constexpr double kDegree = 3.14159265358979323846 / 180.0;  // nobody: rtapi_app refuses to run with a real uid of 0
+constexpr unsigned kRtapiUid = 65534;  // nobody: rtapi_app refuses to run with a real uid of 0
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+constexpr double kCircleA_deg = 30.0;  // the loop's circular test: the table tilted
 
 fs::path module_link() {
     return fs::path(kModuleDir) / "ballbarkins.so";
@@ -304,6 +312,16 @@ class LinuxcncOperator : public acq::ScriptedOperator {
           events_(events) {}
 
     void run_program(const ba::NcProgram& program, std::span<const std::size_t> points, bool retry) override {
+        start(ba::write_nc_program(program, "ballbar " + label_ + (retry ? " retry" : "")),
+              std::string(retry ? "retry program" : "program") + " (" + std::to_string(points.size()) + " points)");
+    }
+    /// The circular test's program (set_part_program), from its start.
+    void run_part_program(std::string_view, bool retry) override {
+        start(part_program_, retry ? "the circular test's program again" : "the circular test's program");
+    }
+    void set_part_program(std::string text) { part_program_ = std::move(text); }
+    /// Loads `text` as the next program file and presses cycle start; returns once it runs.
+    void start(const std::string& text, const std::string& what) {
         // A program still running (its points were given up on) is stopped first, as an operator would.
         if (cnc_.state() != "idle") {
             cnc_.send("abort");
@@ -311,10 +329,9 @@ class LinuxcncOperator : public acq::ScriptedOperator {
         }
         ++programs_;
         const fs::path path = dir_ / (label_ + "-" + std::to_string(programs_) + ".ngc");
-        write_text(path, ba::write_nc_program(program, "ballbar " + label_ + (retry ? " retry" : "")));
+        write_text(path, text);
         const int before = cnc_.count("started");
-        tell(std::string(retry ? "retry program" : "program") + " (" + std::to_string(points.size()) +
-             " points) to LinuxCNC: " + path.string());
+        tell(what + " to LinuxCNC: " + path.string());
         cnc_.send("run " + path.string());
         cnc_.wait([&] { return cnc_.started_locked() > before; }, 30, "program start");
     }
@@ -342,6 +359,7 @@ class LinuxcncOperator : public acq::ScriptedOperator {
     std::string label_;
     const LinuxcncLoopEvents& events_;
     int programs_ = 0;
+    std::string part_program_;
 };
 
 /// Reads the FIFO halsampler writes, for as long as the loop runs a LinuxCNC.
@@ -376,13 +394,59 @@ struct Phase {
     std::int64_t session = 0;
     std::vector<acq::LocationResult> locations;
     std::uint64_t cycles = 0;
+    std::optional<LoopCircle> circle;
 };
+
+/// The circular test `t` through LinuxCNC after an SSM: the table tilted and the tool at the first run's
+/// stand (a positioning program), then the test's program as the circular procedure asks for it.
+LoopCircle circle_through_linuxcnc(storage::Store& store, const acq::MachineFile& machine, const circ::TestSpec& t,
+                                   double a_deg, PtyEmulator& emulator, Linuxcnc& cnc, LinuxcncOperator& op,
+                                   const std::string& label) {
+    constexpr double kDwell_s = 1.0;
+    const auto ax = circ::plane_axis_index(t.plane);
+    std::array<double, 3> stand = t.centre_mm;
+    const double a0 = t.runs.front().start_deg * M_PI / 180.0;
+    stand[static_cast<std::size_t>(ax[0])] += (t.radius_mm + t.feed_in_mm) * std::cos(a0);
+    stand[static_cast<std::size_t>(ax[1])] += (t.radius_mm + t.feed_in_mm) * std::sin(a0);
+    const auto& num = acq::nc_number;
+    op.start("(ballbar " + label + ": the table to A" + num(a_deg) + ", the tool to the circular test's stand)\n" +
+                 "G21 G90 G94 G17\nG0 Z" + num(stand[2]) + "\nG0 A" + num(a_deg) + " C0\nG0 X" + num(stand[0]) + " Y" +
+                 num(stand[1]) + "\nM2\n",
+             "positioning for the circular test");
+    cnc.wait([&] { return cnc.state_locked() == "idle"; }, 120, "the positioning program's end");
+
+    op.set_part_program(acq::circular_program(t, machine.dialect, kDwell_s));
+    PreparedCircular prepared;
+    prepared.test = t;
+    prepared.dialect = machine.dialect;
+    prepared.dwell_s = kDwell_s;
+    prepared.session = create_circular_session(
+        store, t, machine.dialect, kDwell_s, storage::SessionSource::emulator, "linuxcnc-loop",
+        "ballbar demo --controller linuxcnc: circular test, " + label + ", table at A = " + num(a_deg) + "°",
+        &machine.geometry);
+    CircularMeasureOptions mo;
+    mo.device_uri = "serial:" + emulator.path();
+    mo.operator_name = "linuxcnc-loop";
+    mo.notes = "ballbar demo --controller linuxcnc";
+    mo.open_transport = [&emulator] { return device::open_transport("serial:" + emulator.path()); };
+    const CircularMeasureResult run = measure_circular(store, prepared, op, mo);
+    throw_unless_completed(run.summary, run.session_id, "");
+    if (!run.stored) throw Error(ErrorCategory::failed, "the circular test (" + label + ") has no result");
+    const circ::CircularResult& r = run.stored->result;
+    LoopCircle c;
+    c.phase = label;
+    c.session = *prepared.session;
+    c.g_um = r.bidirectional_um.value_or(0.0);
+    c.radial_range_um = r.radial_max_um - r.radial_min_um;
+    c.mean_radius_um = r.mean_radius_um;
+    return c;
+}
 
 /// One SSM session through LinuxCNC with `kinematics` and the HAL lines `halcmds`.
 Phase measure_through_linuxcnc(storage::Store& store, const acq::MachineFile& machine, const acq::Plan& plan,
                                const device::EmulatorConfig& emu_cfg, const fs::path& dir, const std::string& label,
                                const std::string& kinematics, const std::string& halcmds, bool compensating,
-                               const LinuxcncLoopEvents& events) {
+                               const std::optional<circ::TestSpec>& circle, const LinuxcncLoopEvents& events) {
     const fs::path cfg = dir / ("linuxcnc-" + label);
     fs::create_directories(cfg);
     ::chmod(dir.c_str(), 0755);
@@ -421,13 +485,20 @@ Phase measure_through_linuxcnc(storage::Store& store, const acq::MachineFile& ma
     store.start_session(out.session);
     store_plan(store, out.session, plan);
 
-    DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
-    StoreSink sink(store, out.session, plan);
     LinuxcncOperator op(plan, cnc, m, cfg, label, events);
-    acq::Session session(plan, source, sink, op, {});
-    const acq::SessionSummary summary = session.run();
-    sink.finish(summary);
-    store_bar_resolution(store, out.session, source, 0);
+    acq::SessionSummary summary;
+    {
+        DeviceSource source([&emulator] { return device::open_transport("serial:" + emulator.path()); });
+        StoreSink sink(store, out.session, plan);
+        acq::Session session(plan, source, sink, op, {});
+        summary = session.run();
+        sink.finish(summary);
+        store_bar_resolution(store, out.session, source, 0);
+    }
+    if (circle && summary.final_state == acq::State::Done) {
+        if (events.message) events.message("the circular test through LinuxCNC (" + label + ")");
+        out.circle = circle_through_linuxcnc(store, machine, *circle, kCircleA_deg, emulator, cnc, op, label);
+    }
     cnc.stop();
     emulator.halt();
     out.cycles = feed->cycles();
@@ -449,11 +520,69 @@ Phase measure_through_linuxcnc(storage::Store& store, const acq::MachineFile& ma
     return out;
 }
 
+/// "Y0A = -12.30 µm", "C0Y = 8.25\"" (angles in arcseconds at the operator's screen).
+std::string param_text(ba::Param p, double value) {
+    const ba::ParamInfo& info = ba::param_info(p);
+    char buf[96];
+    switch (info.unit) {
+        case ba::ParamUnit::rad:
+            std::snprintf(buf, sizeof buf, "%s = %.2f\"", std::string(info.name).c_str(),
+                          value * 180.0 / M_PI * 3600.0);
+            break;
+        case ba::ParamUnit::mm_per_mm:
+            std::snprintf(buf, sizeof buf, "%s = %.2f µm/m", std::string(info.name).c_str(), value * 1e6);
+            break;
+        default:
+            std::snprintf(buf, sizeof buf, "%s = %.2f µm", std::string(info.name).c_str(), value * 1e3);
+    }
+    return buf;
+}
+
+void store_comparison(storage::Store& store, std::int64_t session, const std::string& metric,
+                      const std::array<double, 3>& before_um, const std::array<double, 3>& after_um) {
+    storage::CompensationRecord stored;
+    stored.metric = metric;
+    for (std::size_t k = 0; k < 3; ++k) stored.axes.push_back({std::string(1, "XYZ"[k]), before_um[k], after_um[k]});
+    store.add_result(session, std::string(storage::kCompensationResultKind), storage::compensation_to_json(stored),
+                     std::nullopt, "ballbar demo/1");
+}
+
 }  // namespace
 
 double LinuxcncLoopResult::gain(int axis) const {
     const double a = rms_after_um[static_cast<std::size_t>(axis)];
     return a > 0 ? rms_before_um[static_cast<std::size_t>(axis)] / a : 0.0;
+}
+
+double LinuxcncLoopResult::third_gain(int axis) const {
+    const double a = rms_third_um[static_cast<std::size_t>(axis)];
+    return third_session != 0 && a > 0 ? rms_before_um[static_cast<std::size_t>(axis)] / a : 0.0;
+}
+
+std::string hidden_effect_refusal(std::string_view id) {
+    const ba::Effect* e = ba::find_effect(id);
+    if (!e) return "no such effect (docs/discovery.md lists them)";
+    const std::string name(ba::param_info(e->param).name);
+    const auto base = ba::rotary_params_for(ba::MachineType::TTTRR);
+    if (std::find(base.begin(), base.end(), e->param) != base.end())
+        return name + " is in the loop's model already: hide an effect outside it";
+    if (e->param == ba::Param::bar_length || e->param == ba::Param::bar_kappa)
+        return "an error of the bar, not of the machine: no compensation in the controller removes it";
+    if (e->unit() == ba::ParamUnit::mm_per_h || e->unit() == ba::ParamUnit::per_K)
+        return "a thermal effect: the loop's sessions last minutes and it would not show; hide one of the "
+               "machine's geometry";
+    return {};
+}
+
+double hidden_effect_size(ba::Param p) {
+    switch (ba::param_info(p).unit) {
+        case ba::ParamUnit::rad:
+            return 40e-6;  // 8": a squareness or tilt a machine is set up within
+        case ba::ParamUnit::mm_per_mm:
+            return 40e-6;  // 40 µm/m: a ball screw's pitch error left uncompensated
+        default:
+            return 0.015;  // 15 µm: a tool length measured off
+    }
 }
 
 std::string linuxcnc_loop_unavailable(const std::string& module_path) {
@@ -498,6 +627,24 @@ acq::PlanSpec loop_plan() {
     for (auto [a, c] : {std::pair{30.0, 0.0}, {20.0, 90.0}, {-20.0, 200.0}, {40.0, -120.0}})
         s.tests.push_back({socket, ba::deg_to_rad(a), ba::deg_to_rad(c), acq::TestKind::BothAxes, {}});
     return s;
+}
+
+circ::TestSpec loop_circle(const acq::MachineFile& machine, const acq::PlanSpec& plan, double a_deg) {
+    circ::TestSpec t;
+    t.plane = circ::Plane::XY;
+    t.radius_mm = plan.bar_length_mm;
+    t.feed_mm_min = 3000;  // 14 s a run; the feed-in at full feed after LinuxCNC's 12 ms ramp
+    t.feed_in_mm = 0.9;    // within the bar's ±1 mm
+    // The tool ball on the socket with the table tilted: the circle's centre in machine coordinates.
+    ba::Pose rotary;
+    rotary.A_rad = ba::deg_to_rad(a_deg);
+    const ba::Vec3 socket = plan.tests.empty() ? ba::Vec3::Zero() : plan.tests.front().socket_mm;
+    const ba::Pose c =
+        ba::command_for_tool_ball(machine.geometry, rotary, ba::nominal_table_ball(machine.geometry, rotary, socket));
+    t.centre_mm = {c.X_mm, c.Y_mm, c.Z_mm};
+    // The clockwise run starts where the counter-clockwise one ended (400° on): its feed-in is radial.
+    t.runs = {{circ::Direction::Ccw, 0.0, 20.0, 360.0}, {circ::Direction::Cw, 40.0, 20.0, 360.0}};
+    return t;
 }
 
 ba::ErrorParams loop_errors(int set) {
@@ -552,6 +699,8 @@ LinuxcncLoopResult run_linuxcnc_loop(storage::Store& store, const LinuxcncLoopOp
     const acq::MachineFile machine = loop_machine();
     acq::PlanSpec spec = o.plan.value_or(loop_plan());
     const acq::Plan plan = acq::make_plan(machine, spec);
+    std::optional<circ::TestSpec> circle;
+    if (o.circle) circle = loop_circle(machine, spec, kCircleA_deg);
 
     device::EmulatorConfig cfg;
     cfg.seed = o.seed;
@@ -571,7 +720,7 @@ LinuxcncLoopResult run_linuxcnc_loop(storage::Store& store, const LinuxcncLoopOp
     if (events.message) events.message("1. the SSM through LinuxCNC, ballbarkins disabled (the nominal kinematics)");
     const Phase before = measure_through_linuxcnc(store, machine, plan, cfg, dir, "before",
                                                   "ballbarkins model=" + nominal_path.string() + " sparm=identityfirst",
-                                                  "HALCMD = setp ballbarkins.enable 0\n", false, events);
+                                                  "HALCMD = setp ballbarkins.enable 0\n", false, circle, events);
     out.before_session = before.session;
 
     // 2. Identification from that session.
@@ -582,16 +731,8 @@ LinuxcncLoopResult run_linuxcnc_loop(storage::Store& store, const LinuxcncLoopOp
     IdentifyResult id = identify(read_inputs(inputs, [&]() -> storage::Store& { return store; }), io,
                                  [&]() -> storage::Store& { return store; });
     if (!id.fit.converged) throw Error(ErrorCategory::failed, "the identification did not converge");
-    for (const auto& e : id.fit.estimates) {
-        if (!e.param || !e.observable) continue;
-        std::ostringstream s;
-        const ba::ParamInfo& info = ba::param_info(*e.param);
-        const bool angle = info.unit == ba::ParamUnit::rad;
-        s.precision(2);
-        s << std::fixed << info.name << " = " << (angle ? e.estimate * 180.0 / M_PI * 3600.0 : e.estimate * 1e3)
-          << (angle ? "\"" : " µm");
-        out.identified.push_back(s.str());
-    }
+    for (const auto& e : id.fit.estimates)
+        if (e.param && e.observable) out.identified.push_back(param_text(*e.param, e.estimate));
 
     // 3. The model in ballbarkins, compensation on; 4. the same SSM again.
     const std::string model_text = storage::model_to_json(id.model);
@@ -600,55 +741,123 @@ LinuxcncLoopResult run_linuxcnc_loop(storage::Store& store, const LinuxcncLoopOp
     out.model_path = model_path.string();
     out.model_hash = fnv1a(model_text);
     if (events.message) events.message("3. the identified model in ballbarkins, compensation on: " + out.model_path);
-    const Phase after =
-        measure_through_linuxcnc(store, machine, plan, cfg, dir, "after",
-                                 "ballbarkins model=" + model_path.string() + " sparm=identityfirst", "", true, events);
+    const Phase after = measure_through_linuxcnc(store, machine, plan, cfg, dir, "after",
+                                                 "ballbarkins model=" + model_path.string() + " sparm=identityfirst",
+                                                 "", true, circle, events);
     out.after_session = after.session;
     out.servo_cycles = before.cycles + after.cycles;
+    for (const Phase* p : {&before, &after})
+        if (p->circle) out.circles.push_back(*p->circle);
 
-    // 5. Each location's total position error before and after, and the machine's part of it.
+    // 6. What the model misses: the discovery workflow on the first session (measured with the nominal
+    // kinematics, so its readings are the machine's own); the extended model back into ballbarkins.
+    std::optional<Phase> third;
+    if (o.discover) {
+        if (events.message)
+            events.message("5. the discovery workflow on session " + std::to_string(before.session) +
+                           ": what the identified model misses");
+        DiscoverOptions dopt;
+        dopt.save_model = "linuxcnc-loop-discovered";
+        const DiscoverResult d = discover(read_inputs(inputs, [&]() -> storage::Store& { return store; }), dopt,
+                                          [&]() -> storage::Store& { return store; });
+        out.discovery_ran = true;
+        for (const auto& step : d.result.steps) {
+            if (step.withdrawn || !step.effect) continue;
+            const std::string iso = step.effect->iso.empty() ? "" : " (" + std::string(step.effect->iso) + ")";
+            std::string value = param_text(step.effect->param, step.estimate);
+            value = value.substr(value.find(" = "));
+            out.discovered.push_back(std::string(step.effect->id) + iso + value);
+        }
+        for (const auto& t : d.result.learned_terms) out.discovered.push_back("an empirical term " + t.term.name());
+        out.discovery_verdict = d.result.verdict.text;
+        if (!out.discovered.empty() && d.stored) {
+            const fs::path ext_path = dir / "extended.model.json";
+            write_text(ext_path, d.stored->params_json);
+            out.extended_model_path = ext_path.string();
+            if (events.message)
+                events.message("6. the extended model in ballbarkins, the same SSM a third time: " +
+                               out.extended_model_path);
+            third = measure_through_linuxcnc(store, machine, plan, cfg, dir, "extended",
+                                             "ballbarkins model=" + ext_path.string() + " sparm=identityfirst", "",
+                                             true, circle, events);
+            out.third_session = third->session;
+            out.servo_cycles += third->cycles;
+            if (third->circle) out.circles.push_back(*third->circle);
+        } else if (events.message) {
+            events.message("   the discovery named nothing the model misses: no third measurement");
+        }
+    }
+
+    // 5. Each location's total position error before and after (and with the extended model), and the
+    // machine's part of it: e less the set-up offset that best explains each measurement's e.
     const std::vector<acq::TrueTest> truth = acq::true_values(plan, cfg.machine.errors);
-    if (!id.model.sockets.empty()) out.setup_offset_mm = id.model.sockets.front().offset_mm;
-    std::array<double, 3> sb{}, sa{}, rb{}, ra{};
+    if (!id.model.sockets.empty()) out.identified_setup_mm = id.model.sockets.front().offset_mm;
+    std::vector<ba::Mat3> turn;  // the table's rotation at each location (the socket turns with it)
+    std::vector<ba::Vec3> eb, ea, et;
     for (const auto& b : before.locations) {
-        for (const auto& a : after.locations) {
-            if (a.test != b.test || a.step != b.step) continue;
-            LoopLocation l;
-            l.test = b.test, l.step = b.step;
-            l.before_mm = b.ssm.exact_mm, l.after_mm = a.ssm.exact_mm;
-            const acq::TrueTest& t = truth.at(static_cast<std::size_t>(b.test));
-            l.true_before_mm = b.step == 1 ? t.e1_mm : t.e2_mm;
-            // The table carries the socket: at step 2 its offset is turned by A and C.
-            const acq::TestSpec& ts = plan.spec.tests.at(static_cast<std::size_t>(b.test));
-            l.setup_mm = b.step == 1
-                             ? out.setup_offset_mm
-                             : ba::Vec3(Eigen::AngleAxisd(ts.first_rad, ba::Vec3::UnitX()) *
-                                        Eigen::AngleAxisd(ts.second_rad, ba::Vec3::UnitZ()) * out.setup_offset_mm);
-            for (std::size_t k = 0; k < 3; ++k) {
-                const auto i = static_cast<Eigen::Index>(k);
-                sb[k] += std::pow(l.machine_before_mm()[i], 2), sa[k] += std::pow(l.machine_after_mm()[i], 2);
-                rb[k] += std::pow(l.before_mm[i], 2), ra[k] += std::pow(l.after_mm[i], 2);
-            }
-            out.locations.push_back(l);
+        const auto same = [&](const acq::LocationResult& x) { return x.test == b.test && x.step == b.step; };
+        const auto a = std::find_if(after.locations.begin(), after.locations.end(), same);
+        if (a == after.locations.end()) continue;
+        LoopLocation l;
+        l.test = b.test, l.step = b.step;
+        l.before_mm = b.ssm.exact_mm, l.after_mm = a->ssm.exact_mm;
+        if (third) {
+            const auto t = std::find_if(third->locations.begin(), third->locations.end(), same);
+            if (t == third->locations.end()) continue;
+            l.third_mm = t->ssm.exact_mm;
+            et.push_back(*l.third_mm);
+        }
+        const acq::TrueTest& t = truth.at(static_cast<std::size_t>(b.test));
+        l.true_before_mm = b.step == 1 ? t.e1_mm : t.e2_mm;
+        const acq::TestSpec& ts = plan.spec.tests.at(static_cast<std::size_t>(b.test));
+        turn.push_back(b.step == 1 ? ba::Mat3::Identity()
+                                   : ba::Mat3(Eigen::AngleAxisd(ts.first_rad, ba::Vec3::UnitX()) *
+                                              Eigen::AngleAxisd(ts.second_rad, ba::Vec3::UnitZ())));
+        eb.push_back(l.before_mm), ea.push_back(l.after_mm);
+        out.locations.push_back(l);
+    }
+    // min Σ|e_i + R_i·s|² with R_i orthonormal: s = −mean(R_iᵀ·e_i).
+    const auto setup_of = [&](const std::vector<ba::Vec3>& e) {
+        ba::Vec3 s = ba::Vec3::Zero();
+        for (std::size_t i = 0; i < e.size(); ++i) s -= turn[i].transpose() * e[i];
+        return e.empty() ? s : ba::Vec3(s / static_cast<double>(e.size()));
+    };
+    out.setup_before_mm = setup_of(eb), out.setup_after_mm = setup_of(ea);
+    if (third) out.setup_third_mm = setup_of(et);
+    std::array<double, 3> sb{}, sa{}, st{}, rb{}, ra{};
+    for (std::size_t i = 0; i < out.locations.size(); ++i) {
+        LoopLocation& l = out.locations[i];
+        l.machine_before_mm = l.before_mm + turn[i] * out.setup_before_mm;
+        l.machine_after_mm = l.after_mm + turn[i] * out.setup_after_mm;
+        if (l.third_mm) l.machine_third_mm = *l.third_mm + turn[i] * out.setup_third_mm;
+        for (std::size_t k = 0; k < 3; ++k) {
+            const auto j = static_cast<Eigen::Index>(k);
+            sb[k] += std::pow(l.machine_before_mm[j], 2), sa[k] += std::pow(l.machine_after_mm[j], 2);
+            if (l.machine_third_mm) st[k] += std::pow((*l.machine_third_mm)[j], 2);
+            rb[k] += std::pow(l.before_mm[j], 2), ra[k] += std::pow(l.after_mm[j], 2);
         }
     }
     const double n = static_cast<double>(std::max<std::size_t>(out.locations.size(), 1));
     for (std::size_t k = 0; k < 3; ++k) {
         out.rms_before_um[k] = 1e3 * std::sqrt(sb[k] / n), out.rms_after_um[k] = 1e3 * std::sqrt(sa[k] / n);
         out.rms_raw_before_um[k] = 1e3 * std::sqrt(rb[k] / n), out.rms_raw_after_um[k] = 1e3 * std::sqrt(ra[k] / n);
+        if (third) out.rms_third_um[k] = 1e3 * std::sqrt(st[k] / n);
     }
-    // Stored with the second session: its report has the before/after page.
-    storage::CompensationRecord stored;
-    stored.metric =
-        "RMS machine position error (SSM's e, the identified socket set-up offset taken out) over the "
-        "plan's " +
+    // Stored with the later sessions: their reports have the before/after page.
+    const std::string over =
+        "RMS machine position error (SSM's e less the socket set-up offset that best explains it) over "
+        "the plan's " +
         std::to_string(out.locations.size()) + " SSM locations, measured through LinuxCNC: session " +
-        std::to_string(out.before_session) + " with ballbarkins disabled (nominal kinematics), session " +
-        std::to_string(out.after_session) + " with the model identified from it in ballbarkins";
-    for (std::size_t k = 0; k < 3; ++k)
-        stored.axes.push_back({std::string(1, "XYZ"[k]), out.rms_before_um[k], out.rms_after_um[k]});
-    store.add_result(out.after_session, std::string(storage::kCompensationResultKind),
-                     storage::compensation_to_json(stored), std::nullopt, "ballbar demo/1");
+        std::to_string(out.before_session) + " with ballbarkins disabled (nominal kinematics), ";
+    store_comparison(
+        store, out.after_session,
+        over + "session " + std::to_string(out.after_session) + " with the model identified from it in ballbarkins",
+        out.rms_before_um, out.rms_after_um);
+    if (third)
+        store_comparison(store, out.third_session,
+                         over + "session " + std::to_string(out.third_session) +
+                             " with the model the discovery extended in ballbarkins",
+                         out.rms_before_um, out.rms_third_um);
     return out;
 }
 
