@@ -12,10 +12,12 @@
 #include <vector>
 
 #include "ballbar/analysis/identify.hpp"
+#include "ballbar/storage/model_codec.hpp"
 #include "ballbar/storage/store.hpp"
 #include "ballbar/workflow/identify.hpp"
 #include "command.hpp"
 #include "figures.hpp"
+#include "files.hpp"
 
 namespace ballbar::app {
 namespace {
@@ -30,6 +32,7 @@ struct IdentifyArgs {
     std::string name;
     bool json = false;
     bool no_store = false;
+    std::string out;  ///< --out: the model as a ballbar-model/1 file (ballbarkins' model=, compensate --model)
 };
 
 std::vector<ba::Param> parse_params(const std::vector<std::string>& names, ba::MachineType type) {
@@ -72,7 +75,15 @@ int run_identify(const IdentifyArgs& args, const Globals& globals) {
     io.free_params = parse_params(args.params, inputs.sets.front().machine.type);
     io.model_name = args.name;
     io.store_model = !args.no_store;
+    if (!args.out.empty()) {
+        try {
+            fileio::check_output(args.out, "--out", database_files(globals));  // before the fit and the store
+        } catch (const fileio::FileError& e) {
+            throw as_error(e);
+        }
+    }
     const workflow::IdentifyResult r = workflow::identify(std::move(inputs), io, opener(true));
+    if (!args.out.empty()) write_output(args.out, "--out", storage::model_to_json(r.model), database_files(globals));
 
     json out = json::parse(r.payload_json);
     // With --no-store there is no stored model: null (docs/cli.md), not absent keys.
@@ -105,6 +116,9 @@ BALLBAR_COMMAND(identify) {
         ->delimiter(',');
     sub->add_option("--name", args->name, "model name in the database (default: the machine's name)");
     sub->add_flag("--no-store", args->no_store, "do not store the model");
+    sub->add_option("--out", args->out,
+                    "also write the model as a ballbar-model/1 file (LinuxCNC's ballbarkins model=, compensate "
+                    "--model FILE)");
     sub->footer(
         "Parameters the data cannot determine are reported unobservable and held at 0.\n"
         "See docs/identification.md.");

@@ -148,9 +148,12 @@ std::string readings_file(double x0c_mm, double y0c_mm) {
 TEST(CliIdentify, RecoversTheCAxisLocationAndStoresTheModel) {
     TempDir d;
     std::ofstream(d.path / "r.csv") << readings_file(0.03, -0.02);
-    const CliRun r = run(d, "identify '" + (d.path / "r.csv").string() + "' --params X0C,Y0C,C_zero --json");
+    const CliRun r = run(d, "identify '" + (d.path / "r.csv").string() + "' --params X0C,Y0C,C_zero --json --out '" +
+                                (d.path / "m.model.json").string() + "'");
     ASSERT_EQ(r.code, 0) << r.err;
     const json a = json::parse(r.out);
+    // --out: the same model as a file, what LinuxCNC's ballbarkins and `compensate --model FILE` read.
+    EXPECT_EQ(json::parse(slurp(d.path / "m.model.json")), a["model"]);
     EXPECT_TRUE(a["converged"].get<bool>());
     std::map<std::string, json> est;
     for (const auto& e : a["estimates"]) est[e["name"].get<std::string>()] = e;
