@@ -25,7 +25,6 @@
 #include <memory>
 #include <mutex>
 #include <random>
-#include <sstream>
 #include <thread>
 
 #include "ballbar/acquisition/circle_program.hpp"
