@@ -12,10 +12,12 @@
 // create rtapi_app's socket (RTAPI_FIFO_PATH names the socket itself, in a directory that uid owns).
 #pragma once
 
+#include <sys/shm.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -64,6 +66,29 @@ inline std::string unavailable() {
         return link.string() + " is installed (the ballbar package?), not a link this test made: not replaced";
     return {};
 #endif
+}
+
+/// Frees the shared memory a killed LinuxCNC left (a test timed out, a CI machine reused): LinuxCNC's
+/// System V keys (HAL, RTAPI, motion, the NML buffers, the samplers), attached by no process, while no
+/// LinuxCNC runs; a later LinuxCNC fails on a leftover of another size ("shmget ... Invalid argument").
+/// The tests run one LinuxCNC at a time (their lock), so what is left is a test's. `ballbar demo
+/// --controller linuxcnc` refuses, naming the keys, instead: it frees nothing it did not make.
+inline void free_orphaned_shm() {
+    if (std::system("pgrep -x rtapi_app > /dev/null || pgrep -x milltask > /dev/null || "
+                    "pgrep -x linuxcncsvr > /dev/null") == 0)
+        return;
+    std::ifstream shm("/proc/sysvipc/shm");
+    std::string line;
+    std::getline(shm, line);  // key shmid perms size cpid lpid nattch ...
+    while (std::getline(shm, line)) {
+        std::istringstream f(line);
+        long key = 0, shmid = 0, perms = 0, size = 0, cpid = 0, lpid = 0, nattch = -1;
+        if (!(f >> key >> shmid >> perms >> size >> cpid >> lpid >> nattch) || nattch != 0) continue;
+        const bool lcnc = key == 0x48414c32 || key == 0x48484c34 || key == 100 || (key >= 1001 && key <= 1005) ||
+                          (key >= 0x48534130 && key <= 0x48534137) || (key >= 0x48535430 && key <= 0x48535437);
+        if (lcnc && ::shmctl(static_cast<int>(shmid), IPC_RMID, nullptr) == 0)
+            std::fprintf(stderr, "freed a killed LinuxCNC's shared memory: key 0x%08lx, %ld bytes\n", key, size);
+    }
 }
 
 /// Points /usr/lib/linuxcnc/modules/ballbarkins.so at a copy of the build's module in `dir`: rtapi_app
@@ -124,6 +149,7 @@ inline std::string scale_limits(const std::string& ini, double scale) {
 inline SimRun run_sim(const ScratchDir& dir, const std::string& kinematics, const std::string& program,
                       const std::vector<std::string>& halcmds = {}, Speedup speedup = {}) {
     ::chmod(dir.path.c_str(), 0755);  // rtapi_app runs as RTAPI_UID: it reads the module and the model here
+    free_orphaned_shm();
     link_module(dir.path);
     const fs::path sim = fs::path(BALLBAR_LINUXCNC_SIM_DIR);
     const fs::path cfg = dir.path / "cfg";

@@ -4,11 +4,17 @@
 // session is measured through the pty, identified, the model loaded into ballbarkins, measured again.
 // ctest label `linuxcnc`; skipped, saying why, where LinuxCNC or the module is absent or not root.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/shm.h>
 #include <sys/stat.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -28,6 +34,7 @@ namespace lc = ballbar::test::lcnc;
 // rotary model, gone with the extended one.
 TEST(LinuxcncLoop, MeasureIdentifyCompensateDiscoverTheHiddenSquarenessMeasureAgainTenTimesSmaller) {
     if (const std::string why = lc::unavailable(); !why.empty()) GTEST_SKIP() << "LinuxCNC tests skipped: " << why;
+    lc::free_orphaned_shm();
 #ifdef BALLBAR_KINS_MODULE
     ballbar::test::TempDir dir;
     ::chmod(dir.path.c_str(), 0755);  // LinuxCNC's real-time process (uid 65534) reads the work directory
@@ -93,6 +100,88 @@ TEST(LinuxcncLoop, MeasureIdentifyCompensateDiscoverTheHiddenSquarenessMeasureAg
     EXPECT_TRUE(std::filesystem::exists(j.at("model").get<std::string>()));
     EXPECT_TRUE(std::filesystem::exists(d.at("extended_model").get<std::string>()));
     EXPECT_EQ(ballbar::test::slurp(dir.file("loop.pdf")).rfind("%PDF", 0), 0u);
+#endif
+}
+
+int linuxcnc_processes() {
+    return std::system(
+               "pgrep -x rtapi_app > /dev/null || pgrep -x milltask > /dev/null || "
+               "pgrep -x linuxcncsvr > /dev/null") == 0;
+}
+
+/// LinuxCNC's shared-memory segments (HAL's, motion's) still in the kernel's table.
+int linuxcnc_segments() {
+    std::ifstream shm("/proc/sysvipc/shm");
+    std::string line;
+    std::getline(shm, line);
+    int n = 0;
+    while (std::getline(shm, line)) {
+        long key = 0;
+        if (std::sscanf(line.c_str(), "%ld", &key) == 1 && (key == 0x48414c32 || key == 100 || key == 0x48534130)) ++n;
+    }
+    return n;
+}
+
+// An operator's Ctrl-\, a kill -9, a crash: the demo dies with LinuxCNC running a program. LinuxCNC
+// must go down with it (its display reads the end of its input, its script shuts it down) and free its
+// shared memory: a LinuxCNC left running, or its leftovers, stop the next run.
+TEST(LinuxcncLoop, AKilledDemoTakesLinuxcncDownAndTheNextRunIsNotBlocked) {
+    if (const std::string why = lc::unavailable(); !why.empty()) GTEST_SKIP() << "LinuxCNC tests skipped: " << why;
+    lc::free_orphaned_shm();
+#ifdef BALLBAR_KINS_MODULE
+    ballbar::test::TempDir dir;
+    ::chmod(dir.path.c_str(), 0755);
+    const std::string cmd = std::string("'") + BALLBAR_EXE + "' --db '" + dir.file("test.db") +
+                            "' demo --controller linuxcnc --json --module '" + BALLBAR_KINS_MODULE + "' --work-dir '" +
+                            dir.file("loop") + "' </dev/null >'" + dir.file("out") + "' 2>'" + dir.file("err") +
+                            "' & echo $! >'" + dir.file("pid") + "'";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const int pid = std::stoi(ballbar::test::slurp(dir.file("pid")));
+    // Until LinuxCNC runs the first measurement's program (its display said "started").
+    bool started = false;
+    for (int i = 0; i < 600 && !started; ++i) {
+        started = ballbar::test::slurp(dir.file("loop/linuxcnc-before.log")).find("ballbar-display: started") !=
+                  std::string::npos;
+        if (!started) ::usleep(100'000);
+    }
+    ASSERT_TRUE(started) << ballbar::test::slurp(dir.file("err"));
+    ::usleep(2'000'000);
+    ASSERT_EQ(::kill(pid, SIGKILL), 0);
+    bool down = false;
+    for (int i = 0; i < 300 && !down; ++i) {
+        down = !linuxcnc_processes() && linuxcnc_segments() == 0;
+        if (!down) ::usleep(100'000);
+    }
+    EXPECT_TRUE(down) << "LinuxCNC still runs, or its shared memory is left, 30 s after the demo was killed:\n"
+                      << ballbar::test::slurp(dir.file("loop/linuxcnc-before.log"));
+    // What was stored survives: the session the kill cut short is listed.
+    const auto listed = ballbar::test::run(dir, "sessions --json");
+    EXPECT_EQ(listed.code, 0) << listed.err;
+    EXPECT_EQ(json::parse(listed.out).size(), 1u) << listed.out;
+#endif
+}
+
+// A LinuxCNC that did not shut down left its shared memory: the demo says so, naming the keys and how
+// to free them, starts nothing and frees nothing (the memory is not its own).
+TEST(LinuxcncLoop, LeftoverSharedMemoryIsNamedAndLeftAlone) {
+    if (const std::string why = lc::unavailable(); !why.empty()) GTEST_SKIP() << "LinuxCNC tests skipped: " << why;
+    lc::free_orphaned_shm();
+#ifdef BALLBAR_KINS_MODULE
+    const int id = ::shmget(0x48534137, 4096, IPC_CREAT | IPC_EXCL | 0600);  // the eighth sampler's key
+    ASSERT_GE(id, 0) << std::strerror(errno);
+    ballbar::test::TempDir dir;
+    ::chmod(dir.path.c_str(), 0755);
+    const auto r = ballbar::test::run(dir, "demo --controller linuxcnc --module '" + std::string(BALLBAR_KINS_MODULE) +
+                                               "' --work-dir '" + dir.file("loop") + "'");
+    shmid_ds st{};
+    const bool still_there = ::shmctl(id, IPC_STAT, &st) == 0;
+    ::shmctl(id, IPC_RMID, nullptr);
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find("0x48534137"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("halrun -U"), std::string::npos) << r.err;
+    EXPECT_TRUE(still_there);
+    EXPECT_FALSE(std::filesystem::exists(dir.file("loop")));
+    EXPECT_EQ(linuxcnc_processes(), 0);
 #endif
 }
 

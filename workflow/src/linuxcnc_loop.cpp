@@ -124,10 +124,44 @@ bool process_running(const char* name) {
     return std::system(cmd.c_str()) == 0;
 }
 
+/// LinuxCNC's System V shared-memory keys (LinuxCNC 2.9: HAL, the uspace RTAPI, motion's
+/// DEFAULT_MOTION_SHMEM_KEY, the NML buffers of emc.nml, the samplers and streamers).
+bool linuxcnc_shm_key(long key) {
+    return key == 0x48414c32 || key == 0x48484c34 || key == 100 || (key >= 1001 && key <= 1005) ||
+           (key >= 0x48534130 && key <= 0x48534137) || (key >= 0x48535430 && key <= 0x48535437);
+}
+
+/// Why LinuxCNC cannot be started here (empty when it can): one already running (it runs once per
+/// machine), or the shared memory of one that did not shut down (a killed LinuxCNC leaves it, and the
+/// next one fails on it, or reads it). ballbar frees neither: they are not its own.
+std::string linuxcnc_in_the_way() {
+    for (const char* p : {"rtapi_app", "milltask", "linuxcncsvr"})
+        if (process_running(p))
+            return std::string("LinuxCNC is already running on this machine (") + p +
+                   "): it runs once per machine, and the loop starts its own simulator; stop it first";
+    std::ifstream shm("/proc/sysvipc/shm");
+    std::string line, keys;
+    std::getline(shm, line);  // the column names
+    while (std::getline(shm, line)) {
+        long key = 0;
+        if (std::sscanf(line.c_str(), "%ld", &key) == 1 && linuxcnc_shm_key(key)) {
+            char hex[16];
+            std::snprintf(hex, sizeof hex, "0x%08lx", static_cast<unsigned long>(key) & 0xffffffffUL);
+            keys += std::string(keys.empty() ? "" : " ") + hex;
+        }
+    }
+    if (!keys.empty())
+        return "the shared memory of a LinuxCNC that did not shut down is still there (keys " + keys +
+               "; a killed LinuxCNC leaves it): free it with `halrun -U`, then `ipcrm -M KEY` for each key left";
+    return {};
+}
+
 /// LinuxCNC started on one configuration, its display taking commands and telling events.
 class Linuxcnc {
   public:
     Linuxcnc(const fs::path& cfg_dir, const std::string& ini, const fs::path& log_path) {
+        if (const std::string why = linuxcnc_in_the_way(); !why.empty())
+            throw Error(ErrorCategory::device, "LinuxCNC cannot be started: " + why);
         log_.open(log_path, std::ios::binary | std::ios::trunc);
         int in[2], out[2];
         if (::pipe2(in, O_CLOEXEC) != 0 || ::pipe2(out, O_CLOEXEC) != 0)
@@ -154,9 +188,13 @@ class Linuxcnc {
         std::vector<char*> envp;
         for (auto& e : env) envp.push_back(e.data());
         envp.push_back(nullptr);
-        std::string a0 = "linuxcnc", a1 = "-r", a2 = ini;
-        char* argv[] = {a0.data(), a1.data(), a2.data(), nullptr};
-        const int rc = ::posix_spawnp(&pid_, "linuxcnc", &fa, nullptr, argv, envp.data());
+        // Through a shell that ignores SIGPIPE (exec keeps an ignored signal ignored): should ballbar be
+        // killed, the `linuxcnc` script's next line to the closed pipe would otherwise kill it before its
+        // shutdown, and leave LinuxCNC's processes running and its shared memory behind. The display
+        // reads the end of its input and quits; the script then shuts LinuxCNC down as at any end.
+        std::string a0 = "sh", a1 = "-c", a2 = "trap '' PIPE; exec linuxcnc -r \"$0\"", a3 = ini;
+        char* argv[] = {a0.data(), a1.data(), a2.data(), a3.data(), nullptr};
+        const int rc = ::posix_spawn(&pid_, "/bin/sh", &fa, nullptr, argv, envp.data());
         posix_spawn_file_actions_destroy(&fa);
         ::close(in[0]);
         ::close(out[1]);
@@ -229,8 +267,9 @@ class Linuxcnc {
         pid_ = -1;
         if (reader_.joinable()) reader_.join();
         ::close(from_);
-        // `linuxcnc` returns before rtapi_app and milltask are gone: the next run must wait for them.
-        for (int i = 0; i < 200 && (process_running("rtapi_app") || process_running("milltask")); ++i) ::usleep(50'000);
+        // `linuxcnc` returns before rtapi_app and milltask are gone: the next run must wait for them (and
+        // for the shared memory they free).
+        for (int i = 0; i < 200 && !linuxcnc_in_the_way().empty(); ++i) ::usleep(50'000);
     }
 
   private:
@@ -663,6 +702,8 @@ LinuxcncLoopResult run_linuxcnc_loop(storage::Store& store, const LinuxcncLoopOp
                                      const LinuxcncLoopEvents& events) {
     if (const std::string why = linuxcnc_loop_unavailable(o.module_path); !why.empty())
         throw Error(ErrorCategory::device, "LinuxCNC cannot run the loop here: " + why);
+    if (const std::string why = linuxcnc_in_the_way(); !why.empty())
+        throw Error(ErrorCategory::device, "LinuxCNC cannot run the loop now: " + why);
     LinuxcncLoopResult out;
     fs::path dir;
     if (o.work_dir.empty()) {
