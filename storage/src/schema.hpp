@@ -179,7 +179,47 @@ CREATE TABLE sample_gaps (
 ) WITHOUT ROWID;
 )sql";
 
-inline constexpr std::array<std::string_view, 6> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3,
-                                                                kMigrationV4, kMigrationV5, kMigrationV6};
+// v7: identities that survive a fleet (docs/fleet.md). The station: this database's own uuid. The
+// machine registry: a machine an operator registered has an asset id (the shop's name for it, unique),
+// a location and its whole machine file (travel, dialect, feed, tolerances); a machine known only by the
+// geometry a session was measured with has none (asset_id NULL; one row per geometry, as before). Two
+// registered machines may share a geometry (two mills of one model): the table is rebuilt without v1's
+// UNIQUE (geometry_json), which the index below keeps for unregistered ones. Machines, models and
+// results get a uuid (122 random bits: ballbar_uuid(), the Store's, per row); sessions keep theirs.
+// Store::migrate runs this with foreign keys off and checks them before it commits.
+inline constexpr std::string_view kMigrationV7 = R"sql(
+CREATE TABLE station (
+  id INTEGER PRIMARY KEY CHECK (id = 1),
+  uuid TEXT NOT NULL,
+  created_at TEXT NOT NULL
+);
+INSERT INTO station(id, uuid, created_at) VALUES (1, ballbar_uuid(), strftime('%Y-%m-%dT%H:%M:%fZ', 'now'));
+CREATE TABLE machines_v7 (
+  id INTEGER PRIMARY KEY,
+  uuid TEXT NOT NULL UNIQUE,
+  asset_id TEXT UNIQUE CHECK (asset_id IS NULL OR length(asset_id) > 0),
+  name TEXT NOT NULL DEFAULT '',
+  type TEXT NOT NULL CHECK (type IN ('RRTTT', 'TTTRR', 'RTTTR')),
+  geometry_json TEXT NOT NULL,
+  location TEXT NOT NULL DEFAULT '',
+  machine_file_json TEXT NOT NULL DEFAULT '',
+  registered_at TEXT,
+  updated_at TEXT
+);
+INSERT INTO machines_v7(id, uuid, name, type, geometry_json)
+  SELECT id, ballbar_uuid(), name, type, geometry_json FROM machines ORDER BY id;
+DROP TABLE machines;
+ALTER TABLE machines_v7 RENAME TO machines;
+CREATE UNIQUE INDEX machines_unregistered_by_geometry ON machines(geometry_json) WHERE asset_id IS NULL;
+ALTER TABLE models ADD COLUMN uuid TEXT;
+UPDATE models SET uuid = ballbar_uuid();
+CREATE UNIQUE INDEX models_by_uuid ON models(uuid);
+ALTER TABLE results ADD COLUMN uuid TEXT;
+UPDATE results SET uuid = ballbar_uuid();
+CREATE UNIQUE INDEX results_by_uuid ON results(uuid);
+)sql";
+
+inline constexpr std::array<std::string_view, 7> kMigrations = {kMigrationV1, kMigrationV2, kMigrationV3, kMigrationV4,
+                                                                kMigrationV5, kMigrationV6, kMigrationV7};
 
 }  // namespace ballbar::storage::detail

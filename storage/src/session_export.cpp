@@ -45,6 +45,7 @@ ojson session_header(const SessionInfo& s) {
     j["started_at"] = s.started_at;
     j["ended_at"] = opt(s.ended_at);
     j["machine"] = ojson::parse(machine_to_json(s.machine));
+    j["machine_asset_id"] = s.machine_asset.empty() ? ojson(nullptr) : ojson(s.machine_asset);
     j["instrument"] = s.instrument ? ojson::parse(instrument_to_json(*s.instrument)) : ojson(nullptr);
     j["metadata"] = parse_or_text(s.metadata_json);
     j["sample_count"] = s.sample_count;

@@ -19,6 +19,7 @@
 
 #include "ballbar/storage/machine_json.hpp"
 #include "schema.hpp"
+#include "uuid.hpp"
 
 namespace ballbar::storage {
 namespace {
@@ -31,13 +32,6 @@ constexpr std::array<std::string_view, 3> kSourceNames = {"device", "emulator", 
 
 std::uint32_t be32(const unsigned char* p) {
     return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
-}
-
-std::uint64_t splitmix64(std::uint64_t& state) {
-    std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
 }
 
 bool is_memory(const std::string& path) {
@@ -203,8 +197,6 @@ Store::Store(const std::string& path, StoreOptions options)
       db_((check_file(path), path),
           options_.read_only ? Database::Mode::read_only : Database::Mode::read_write_create) {
     if (!options_.clock) options_.clock = [] { return std::chrono::system_clock::now(); };
-    uuid_state_ = options_.uuid_seed ? *options_.uuid_seed
-                                     : (std::uint64_t{std::random_device{}()} << 32) ^ std::random_device{}();
     db_.set_busy_timeout(options_.busy_timeout_ms);
 
     // Read-only checks first: nothing may be written to a file we refuse. In one read transaction, so
@@ -256,7 +248,7 @@ Store::Store(const std::string& path, StoreOptions options)
         }
     }
     db_.exec(options_.sync_full ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
-    db_.exec("PRAGMA foreign_keys = ON");
+    detail::register_uuid_function(db_.handle());
     {
         // The schema is created (or migrated) under the write lock, and the checks are made again under
         // it: of several processes that first open a new file at once, one creates the tables, the others
@@ -266,6 +258,9 @@ Store::Store(const std::string& path, StoreOptions options)
         migrate();
         tx.commit();
     }
+    // After the migrations: v7 rebuilds a table others refer to, which SQLite allows with foreign keys
+    // off only (migrate() checks them before each commit). The pragma is a no-op inside a transaction.
+    db_.exec("PRAGMA foreign_keys = ON");
     schema_version_ = kSchemaVersion;
     if (options_.recover) recover_unfinished();
 }
@@ -331,6 +326,11 @@ void Store::migrate() {
     for (std::size_t v = version; v < detail::kMigrations.size(); ++v) {
         Transaction tx(db_);
         db_.exec(detail::kMigrations[v]);
+        // v7 rebuilt machines, to which sessions refer.
+        if (auto check = db_.prepare("PRAGMA foreign_key_check(sessions)"); check.step())
+            throw StorageError(Kind::corrupt, "migrating " + path() + " to schema v" + std::to_string(v + 1) +
+                                                  " would break session " + std::to_string(check.column_int(1)) +
+                                                  "'s machine; nothing was changed");
         db_.exec("PRAGMA user_version = " + std::to_string(v + 1));
         db_.exec("PRAGMA application_id = " + std::to_string(kApplicationId));
         tx.commit();
@@ -413,23 +413,16 @@ std::string Store::integrity_check() {
 }
 
 std::string Store::new_uuid() {
-    std::uint64_t hi = splitmix64(uuid_state_), lo = splitmix64(uuid_state_);
-    hi = (hi & 0xffffffffffff0fffull) | 0x0000000000004000ull;  // version 4
-    lo = (lo & 0x3fffffffffffffffull) | 0x8000000000000000ull;  // variant 10
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%08x-%04x-%04x-%04x-%012llx", static_cast<unsigned>(hi >> 32),
-                  static_cast<unsigned>((hi >> 16) & 0xffff), static_cast<unsigned>(hi & 0xffff),
-                  static_cast<unsigned>(lo >> 48), static_cast<unsigned long long>(lo & 0xffffffffffffull));
-    return buf;
+    return detail::random_uuid();
 }
 
 std::int64_t Store::upsert_machine(const analysis::MachineGeometry& machine) {
     const std::string json = machine_to_json(machine);
-    auto find = db_.prepare("SELECT id FROM machines WHERE geometry_json = ?");
+    auto find = db_.prepare("SELECT id FROM machines WHERE geometry_json = ? AND asset_id IS NULL");
     find.bind(1, json);
     if (find.step()) return find.column_int(0);
-    auto ins = db_.prepare("INSERT INTO machines(name, type, geometry_json) VALUES (?, ?, ?)");
-    ins.bind(1, machine.name).bind(2, analysis::to_string(machine.type)).bind(3, json).run();
+    auto ins = db_.prepare("INSERT INTO machines(uuid, name, type, geometry_json) VALUES (?, ?, ?, ?)");
+    ins.bind(1, new_uuid()).bind(2, machine.name).bind(3, analysis::to_string(machine.type)).bind(4, json).run();
     return db_.last_insert_rowid();
 }
 
@@ -450,7 +443,16 @@ std::int64_t Store::upsert_instrument(const Instrument& in) {
 
 std::int64_t Store::create_session(const NewSession& s) {
     Transaction tx(db_);
-    const std::int64_t machine_id = upsert_machine(s.machine);
+    std::int64_t machine_id = 0;
+    if (s.machine_asset.empty()) {
+        machine_id = upsert_machine(s.machine);
+    } else {
+        const MachineEntry m = machine(s.machine_asset);
+        if (m.geometry_json != machine_to_json(s.machine))
+            throw StorageError(Kind::invalid, "the session's geometry is not machine " + s.machine_asset +
+                                                  "'s as registered (ballbar machines show " + s.machine_asset + ")");
+        machine_id = m.id;
+    }
     std::optional<std::int64_t> instrument_id;
     if (s.instrument) instrument_id = upsert_instrument(*s.instrument);
     const std::string now = now_iso8601();

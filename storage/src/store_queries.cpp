@@ -61,6 +61,12 @@ std::int64_t to_db(std::uint64_t v) {
 }  // namespace
 
 void Store::annotate(SessionInfo& s) {
+    if (schema_version_ >= 7) {
+        auto a = db_.prepare(
+            "SELECT coalesce(m.asset_id, '') FROM sessions s JOIN machines m ON m.id = s.machine_id WHERE s.id = ?");
+        a.bind(1, s.id);
+        if (a.step()) s.machine_asset = a.column_text(0);
+    }
     if ((s.state == SessionState::created || s.state == SessionState::running) && !writer_alive(s.id)) {
         s.state = SessionState::interrupted;
         s.writer_gone = true;
@@ -380,9 +386,10 @@ std::int64_t Store::add_result(std::int64_t session_id, std::string_view kind, s
     Transaction tx(db_);
     state_of(session_id);
     auto st = db_.prepare(
-        "INSERT INTO results(session_id, kind, payload_json, model_id, producer, created_at) VALUES (?,?,?,?,?,?)");
+        "INSERT INTO results(session_id, kind, payload_json, model_id, producer, created_at, uuid) "
+        "VALUES (?,?,?,?,?,?,?)");
     st.bind(1, session_id).bind(2, kind).bind(3, payload_json).bind(4, model_id).bind(5, producer);
-    st.bind(6, now_iso8601()).run();
+    st.bind(6, now_iso8601()).bind(7, new_uuid()).run();
     const std::int64_t id = db_.last_insert_rowid();
     tx.commit();
     return id;
@@ -430,9 +437,9 @@ ModelRecord Store::save_model(std::string_view name, std::string_view params_jso
     next.step();
     const std::int64_t version = next.column_int(0);
     auto st = db_.prepare(
-        "INSERT INTO models(name, version, parent_id, params_json, notes, created_at) VALUES (?,?,?,?,?,?)");
+        "INSERT INTO models(name, version, parent_id, params_json, notes, created_at, uuid) VALUES (?,?,?,?,?,?,?)");
     st.bind(1, name).bind(2, version).bind(3, parent_id).bind(4, params_json).bind(5, notes);
-    st.bind(6, now_iso8601()).run();
+    st.bind(6, now_iso8601()).bind(7, new_uuid()).run();
     const std::int64_t id = db_.last_insert_rowid();
     auto link = db_.prepare("INSERT OR IGNORE INTO model_sessions(model_id, session_id) VALUES (?, ?)");
     for (const auto sid : session_ids) {

@@ -185,7 +185,7 @@ TEST(CliStorage, CsvExportWritesPointsAndSamples) {
 TEST(CliStorage, NewerDatabaseIsRefused) {
     TempDir d;
     ASSERT_EQ(run(d, "import '" + kData + "spec_example.csv'").code, 0);
-    ASSERT_EQ(std::system(("sqlite3 '" + d.file("test.db") + "' 'PRAGMA user_version = 7' >/dev/null").c_str()), 0);
+    ASSERT_EQ(std::system(("sqlite3 '" + d.file("test.db") + "' 'PRAGMA user_version = 99' >/dev/null").c_str()), 0);
     const std::string before = slurp(d.file("test.db"));
     const CliRun r = run(d, "sessions");
     EXPECT_EQ(r.code, 1);

@@ -3,6 +3,10 @@
 // version is migrated in place, loses nothing and keeps working.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <string>
+#include <vector>
+
 #include "ballbar/storage/imports.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/sqlite.hpp"
@@ -259,6 +263,91 @@ TEST(Migration, V5GetsTheGapsTableAndItsSessionsNoRecordedGaps) {
     ASSERT_EQ(store.sample_gaps(1).size(), 1u);
     EXPECT_EQ(store.sample_gaps(1)[0].before_seq, 10u);
 }
+
+bool is_v4_uuid(const std::string& u) {
+    if (u.size() != 36 || u[8] != '-' || u[13] != '-' || u[18] != '-' || u[23] != '-' || u[14] != '4') return false;
+    return std::string("89ab").find(u[19]) != std::string::npos &&
+           u.find_first_not_of("0123456789abcdef-") == std::string::npos;
+}
+
+// Every earlier version reaches v7 (the fleet's identities): its machines, models and results get
+// uuids of their own, each machine stays the one its sessions were measured on (the machines table is
+// rebuilt), the file gets a station id, and sessions keep their uuids.
+class FromEveryVersion : public ::testing::TestWithParam<int> {};
+
+TEST_P(FromEveryVersion, TheMachinesModelsAndResultsGetUuidsAndTheSessionsKeepTheirMachines) {
+    const int version = GetParam();
+    TempDir dir;
+    const std::string path = dir.file("old.db");
+    const std::string g1 = machine_to_json(test::tttrr()), g2 = [] {
+        auto g = test::tttrr();
+        g.tool_ball_mm.z() += 10;
+        return machine_to_json(g);
+    }();
+    {
+        Database db(path);
+        db.exec("BEGIN");
+        for (int v = 0; v < version; ++v) db.exec(detail::kMigrations[static_cast<std::size_t>(v)]);
+        db.exec("PRAGMA user_version = " + std::to_string(version));
+        db.exec("PRAGMA application_id = " + std::to_string(Store::kApplicationId));
+        auto m = db.prepare("INSERT INTO machines(id, name, type, geometry_json) VALUES (?, ?, 'TTTRR', ?)");
+        m.bind(1, 7).bind(2, "mill-1").bind(3, g1).run();
+        auto m2 = db.prepare("INSERT INTO machines(id, name, type, geometry_json) VALUES (?, ?, 'TTTRR', ?)");
+        m2.bind(1, 9).bind(2, "mill-2").bind(3, g2).run();
+        db.exec(R"sql(
+INSERT INTO sessions(id, uuid, machine_id, source, state, started_at) VALUES
+  (1, '11111111-1111-4111-8111-111111111111', 9, 'emulator', 'completed', '2026-11-01T10:00:00.000Z'),
+  (2, '22222222-2222-4222-8222-222222222222', 7, 'emulator', 'completed', '2026-11-02T10:00:00.000Z');
+INSERT INTO models(id, name, version, params_json, created_at) VALUES (1, 'mill-1', 1, '{}', '2026-11-01T11:00:00.000Z');
+INSERT INTO results(id, session_id, kind, payload_json, model_id, created_at) VALUES
+  (1, 1, 'ssm', '{"test":1}', NULL, '2026-11-01T10:01:00.000Z'),
+  (2, 2, 'identification', '{}', 1, '2026-11-02T10:01:00.000Z');
+)sql");
+        db.exec("COMMIT");
+    }
+    Store store(path);
+    EXPECT_EQ(store.db().query_int("PRAGMA user_version"), Store::kSchemaVersion);
+    EXPECT_EQ(store.integrity_check(), "ok");
+    EXPECT_EQ(store.db().query_int("SELECT count(*) FROM pragma_foreign_key_check"), 0);
+    EXPECT_TRUE(is_v4_uuid(store.station_uuid())) << store.station_uuid();
+    EXPECT_EQ(store.session(1).uuid, "11111111-1111-4111-8111-111111111111");
+    EXPECT_EQ(store.session(1).machine.name, "mill-2");
+    auto want = machine_from_json(g1);
+    want.name = "mill-1";  // the machines table's name column names it
+    EXPECT_EQ(machine_to_json(store.session(2).machine), machine_to_json(want));
+    EXPECT_EQ(store.session(2).machine_asset, "");
+    std::vector<std::string> uuids;
+    for (const char* table : {"machines", "models", "results"}) {
+        auto st = store.db().prepare(std::string("SELECT uuid FROM ") + table);
+        while (st.step()) uuids.push_back(st.column_text(0));
+    }
+    ASSERT_EQ(uuids.size(), 5u);
+    for (const auto& u : uuids) EXPECT_TRUE(is_v4_uuid(u)) << u;
+    std::sort(uuids.begin(), uuids.end());
+    EXPECT_EQ(std::unique(uuids.begin(), uuids.end()), uuids.end()) << "one uuid per row";
+    const auto machines = store.machines();
+    ASSERT_EQ(machines.size(), 2u);
+    EXPECT_EQ(machines[0].asset_id, "");
+    EXPECT_EQ(machines[0].session_count, 1);
+    // The registry on a migrated file: a registered machine may share an old one's geometry, and a
+    // session measured by geometry alone still lands on the old row.
+    NewMachine n;
+    n.asset_id = "M-0042";
+    n.name = "mill-1";
+    n.geometry = machine_from_json(g1);
+    EXPECT_EQ(store.register_machine(n).session_count, 0);
+    NewSession s;
+    s.machine = machine_from_json(g1);
+    s.source = SessionSource::emulator;
+    const auto by_geometry = store.create_session(s);
+    EXPECT_EQ(store.session(by_geometry).machine_asset, "");
+    EXPECT_EQ(store.db().query_int("SELECT machine_id FROM sessions WHERE id = " + std::to_string(by_geometry)), 7);
+    s.machine_asset = "M-0042";
+    EXPECT_EQ(store.session(store.create_session(s)).machine_asset, "M-0042");
+}
+
+INSTANTIATE_TEST_SUITE_P(Migration, FromEveryVersion, ::testing::Range(1, Store::kSchemaVersion),
+                         [](const auto& p) { return "V" + std::to_string(p.param); });
 
 TEST(Migration, ProcedureStepsStayOutOfTheLifecycle) {
     TempDir dir;

@@ -21,7 +21,6 @@ using test::TempDir;
 StoreOptions fixed_clock() {
     StoreOptions o;
     o.clock = [] { return std::chrono::system_clock::time_point(std::chrono::seconds(1'800'000'000)); };
-    o.uuid_seed = 7;
     return o;
 }
 

@@ -50,9 +50,45 @@ struct Instrument {
     std::string extra_json;        ///< other keys of the `instrument` header, as a JSON object ("" = none)
 };
 
+/// A machine of the registry (`ballbar machines`), or one known only by the geometry a session was
+/// measured with (no asset id). Schema v7.
+struct MachineEntry {
+    std::int64_t id = 0;
+    std::string uuid;
+    std::string asset_id;  ///< the shop's id for it, unique; empty: not registered
+    std::string name;
+    analysis::MachineType type = analysis::MachineType::TTTRR;
+    std::string geometry_json;
+    std::string location;           ///< hall, cell: free text
+    std::string machine_file_json;  ///< registered: its whole machine file (travel, dialect, feed, tolerances)
+    std::string registered_at;      ///< ISO 8601; empty: not registered
+    std::string updated_at;         ///< last `edit`; empty: never edited
+    std::int64_t session_count = 0;
+};
+
+/// A machine to register.
+struct NewMachine {
+    std::string asset_id;
+    std::string name;
+    std::string location;
+    analysis::MachineGeometry geometry;
+    std::string machine_file_json;
+};
+
+/// What `machines edit` changes (empty: kept). The geometry only while no session was measured on it.
+struct MachineEdit {
+    std::optional<std::string> name;
+    std::optional<std::string> location;
+    std::optional<analysis::MachineGeometry> geometry;
+    std::optional<std::string> machine_file_json;
+};
+
 /// What the caller knows when a session begins.
 struct NewSession {
     analysis::MachineGeometry machine;
+    /// The registry's machine measured (its asset id); `machine` must be its geometry. Empty: the
+    /// session's machine is known by its geometry only.
+    std::string machine_asset;
     std::optional<Instrument> instrument;
     SessionSource source = SessionSource::device;
     std::string operator_name;
@@ -67,6 +103,7 @@ struct SessionInfo {
     std::int64_t id = 0;
     std::string uuid;
     analysis::MachineGeometry machine;
+    std::string machine_asset;  ///< the registry's asset id; empty: not registered (or a file before v7)
     std::optional<Instrument> instrument;
     SessionSource source = SessionSource::device;
     SessionState state = SessionState::created;
@@ -163,8 +200,6 @@ struct ModelRecord {
 struct StoreOptions {
     /// Wall clock for audit times. Default: std::chrono::system_clock::now.
     std::function<std::chrono::system_clock::time_point()> clock;
-    /// Seed for session UUIDs (deterministic tests); empty: std::random_device.
-    std::optional<std::uint64_t> uuid_seed;
     int busy_timeout_ms = 5000;
     /// Mark unfinished sessions whose owner is gone as `interrupted` on open (needs write access).
     bool recover = true;
@@ -177,7 +212,7 @@ struct StoreOptions {
 
 class Store {
   public:
-    static constexpr int kSchemaVersion = 6;
+    static constexpr int kSchemaVersion = 7;
     static constexpr std::int64_t kApplicationId = 0x42424152;  // "BBAR"
 
     /// Opens or creates the database at `path` and migrates it to kSchemaVersion. Throws StorageError:
@@ -277,6 +312,19 @@ class Store {
     std::vector<ModelRecord> model_history(std::string_view name);
     std::optional<ModelRecord> latest_model(std::string_view name);
 
+    // The machine registry and the station (schema v7; docs/fleet.md) ---------------------------------
+    /// Registers a machine. Throws Kind::invalid when the asset id is taken (or empty).
+    MachineEntry register_machine(const NewMachine& machine);
+    /// Registered machines by asset id, then the machines known only by a session's geometry.
+    std::vector<MachineEntry> machines();
+    /// A registered machine. Throws Kind::not_found naming the asset ids there are.
+    MachineEntry machine(std::string_view asset_id);
+    /// Changes a registered machine. Throws Kind::invalid for a new geometry of a machine that has
+    /// sessions (their analysis rests on the geometry they were measured with: register a new one).
+    MachineEntry edit_machine(std::string_view asset_id, const MachineEdit& edit);
+    /// This database's own id (made when it was created or migrated to v7).
+    std::string station_uuid();
+
   private:
     void check_file(const std::string& path) const;
     void migrate();
@@ -285,7 +333,7 @@ class Store {
     void unlock_session(std::int64_t id);
     std::int64_t upsert_machine(const analysis::MachineGeometry& machine);
     std::int64_t upsert_instrument(const Instrument& instrument);
-    std::string new_uuid();
+    static std::string new_uuid();
     SessionState state_of(std::int64_t session_id);
     ModelRecord read_model(Statement& st);
     void annotate(SessionInfo& s);
@@ -298,7 +346,6 @@ class Store {
     std::vector<std::int64_t> owned_;
     std::vector<std::int64_t> recovered_;
     std::string damage_;
-    std::uint64_t uuid_state_ = 0;
 };
 
 }  // namespace ballbar::storage
