@@ -30,6 +30,7 @@
 #include "ballbar/workflow/circular_demo.hpp"
 #include "ballbar/workflow/circular_measure.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
+#include "ballbar/workflow/machines.hpp"
 #include "ballbar/workflow/session_io.hpp"
 #include "circle_measure.hpp"
 #include "circle_output.hpp"
@@ -202,6 +203,7 @@ struct MeasureOptions {
     std::string resume;
     std::string operator_name;
     std::string machine_file;  ///< --machine: the machine tested (ballbar-machine/1)
+    std::string asset;         ///< --asset: the registry's machine tested
     bool non_interactive = false;
     bool json = false;
 };
@@ -270,7 +272,16 @@ int run_circle_measure(const MeasureOptions& o, const Globals& globals) {
     workflow::CircularMeasureOptions mo;
     mo.device_uri = o.device;
     mo.operator_name = o.operator_name;
-    if (!o.machine_file.empty()) {
+    if (!o.machine_file.empty() && !o.asset.empty())
+        throw Error(ErrorCategory::bad_input,
+                    "--machine and --asset: give one (a registered machine is tested with its "
+                    "registered file)");
+    if (!o.asset.empty()) {
+        const acq::MachineFile machine = workflow::registered_machine_file(store, o.asset);
+        mo.machine = machine.geometry;
+        mo.machine_asset = o.asset;
+        mo.tolerance_um = machine.tolerances.circularity_um;
+    } else if (!o.machine_file.empty()) {
         try {
             const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
             mo.machine = machine.geometry;
@@ -452,6 +463,9 @@ void add_circle_measure(CLI::App& circle, Globals& globals) {
     m->add_option("--operator", o->operator_name, "operator name stored with the session");
     m->add_option("--machine", o->machine_file,
                   "the machine tested (its machine file): the session is listed and trended under it");
+    m->add_option("--asset", o->asset,
+                  "the registry's machine tested (ballbar machines add), instead of --machine: its tolerance judges "
+                  "G, and the session is listed and trended under its asset id");
     m->add_flag("--non-interactive", o->non_interactive, "answer every question yes (logged)");
     m->add_flag("--json", o->json, "events as JSON lines on stdout (answers from stdin unless --non-interactive)");
     m->callback([o, feed_in, &globals] {

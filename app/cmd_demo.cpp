@@ -22,6 +22,7 @@
 #include "ballbar/storage/compensation_codec.hpp"
 #include "ballbar/version.hpp"
 #include "ballbar/workflow/gauge_source.hpp"
+#include "ballbar/workflow/machines.hpp"
 #include "ballbar/workflow/ssm_demo.hpp"
 #include "circle_measure.hpp"  // demo --test circular
 #include "command.hpp"
@@ -58,6 +59,7 @@ struct DemoOptions {
     std::string module;
     int error_set = 0;
     std::string hidden;     ///< --hidden EFFECT (--controller linuxcnc)
+    std::string asset;      ///< --asset ID: the registry's machine, emulated
     bool discover = false;  ///< --discover (--controller linuxcnc)
 };
 
@@ -108,6 +110,11 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
             throw as_error(e);
         }
     }
+    if (!o.asset.empty() && (o.controller == "linuxcnc" || o.test == "circular" ||
+                             (!o.instrument.empty() && o.instrument != "ballbar") || o.compensate))
+        throw Error(ErrorCategory::bad_input,
+                    "--asset runs the SSM demo on the registered machine; not with --controller, --test circular, "
+                    "--instrument or --compensate");
     if (o.controller == "linuxcnc")
         return run_linuxcnc_demo(
             {o.seed, o.json, o.work_dir, o.module, o.error_set, o.plan, o.hidden, o.discover, o.report}, globals);
@@ -115,9 +122,19 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
         return run_circular_demo({o.seed, o.json, o.plane, o.arc_deg, 100.0, 1000.0, o.faults, o.report}, globals);
     if (!o.instrument.empty() && o.instrument != "ballbar")
         return run_gauge_demo({o.instrument, o.machine, o.seed, o.gauge_rate_hz, o.json}, resolve_db_path(globals));
-    const auto type = ba::parse_machine_type(o.machine);
-    if (!type) throw Error(ErrorCategory::bad_input, "--machine must be RRTTT, TTTRR or RTTTR");
+    // A killed demo loses at most its last batch; the demo does not need an fsync per commit.
+    storage::StoreOptions so;
+    so.sync_full = false;
+    std::optional<storage::Store> registry;
     workflow::SsmDemoOptions demo;
+    if (!o.asset.empty()) {
+        registry.emplace(existing_db_path(globals), so);
+        demo.registered = workflow::registered_machine_file(*registry, o.asset);
+        demo.machine_asset = o.asset;
+    }
+    const auto type =
+        demo.registered ? std::optional(demo.registered->geometry.type) : ba::parse_machine_type(o.machine);
+    if (!type) throw Error(ErrorCategory::bad_input, "--machine must be RRTTT, TTTRR or RTTTR");
     demo.machine = *type;
     demo.seed = o.seed;
     demo.tolerances = o.tolerances;
@@ -135,19 +152,17 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     }
     if (!o.faults.empty()) demo.faults = parse_faults_option(o.faults);
 
-    // A killed demo loses at most its last batch; the demo does not need an fsync per commit.
-    storage::StoreOptions so;
-    so.sync_full = false;
-    storage::Store store(resolve_db_path(globals), so);
+    if (!registry) registry.emplace(resolve_db_path(globals), so);
+    storage::Store& store = *registry;
 
     const bool show = !o.json && ::isatty(STDERR_FILENO);  // the running count, on a terminal
     std::size_t last_done = static_cast<std::size_t>(-1);
     workflow::SsmDemoEvents events;
     events.started = [&](std::int64_t, const acq::Plan& plan, const std::string& pty) {
         if (!o.json)
-            std::cout << "ballbar demo: " << o.machine << " (" << plan.machine.geometry.name << "), "
-                      << plan.test_count() << " two-step tests, " << plan.points.size() << " points; emulator on "
-                      << pty << "\n";
+            std::cout << "ballbar demo: " << ba::to_string(plan.machine.geometry.type) << " ("
+                      << plan.machine.geometry.name << "), " << plan.test_count() << " two-step tests, "
+                      << plan.points.size() << " points; emulator on " << pty << "\n";
     };
     events.progress = [&](const acq::Progress& p) {
         if (!show || p.done == last_done) return;
@@ -179,7 +194,7 @@ int run_demo(const DemoOptions& o, const Globals& globals) {
     // Compare with the truth.
     ojson out;
     out["session"] = id;
-    out["machine"] = o.machine;
+    out["machine"] = std::string(ba::to_string(plan.machine.geometry.type));
     out["locations"] = ojson::array();
     out["orientation"] = ojson::array();
     for (const auto& [l, tr] : run.locations) {
@@ -321,6 +336,9 @@ BALLBAR_COMMAND(demo) {
     sub->add_flag("--discover", o->discover,
                   "--controller linuxcnc: then the discovery workflow on the first session; what it names goes "
                   "into ballbarkins with the model and the SSM is measured a third time");
+    sub->add_option("--asset", o->asset,
+                    "the SSM demo on a registered machine (ballbar machines add): its geometry emulated, the session "
+                    "stored under its asset id");
     sub->add_option("--hidden", o->hidden,
                     "--controller linuxcnc: an effect outside the model in the emulated machine, at a typical "
                     "size (an id of docs/discovery.md's library, e.g. squareness_XY); implies --discover");

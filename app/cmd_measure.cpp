@@ -18,6 +18,7 @@
 #include "ballbar/device/emulator.hpp"
 #include "ballbar/device/gauge.hpp"
 #include "ballbar/device/uri.hpp"
+#include "ballbar/workflow/machines.hpp"
 #include "ballbar/workflow/measure.hpp"
 #include "command.hpp"
 #include "figures.hpp"
@@ -36,6 +37,7 @@ namespace ba = ballbar::analysis;
 struct MeasureOptions {
     std::string device;
     std::string machine_file;
+    std::string asset;  ///< --asset: the registry's machine instead of a machine file
     std::string plan_file;
     std::string operator_name;
     std::string resume;
@@ -86,9 +88,16 @@ std::vector<fileio::Protected> measure_inputs(const MeasureOptions& o, const std
 
 /// --dry-run: plan, check and write the NC program; no instrument, no database.
 int dry_run(const MeasureOptions& o, const Globals& globals) {
-    if (o.machine_file.empty()) throw Error(ErrorCategory::bad_input, "--machine FILE is required");
+    if (o.machine_file.empty() && o.asset.empty())
+        throw Error(ErrorCategory::bad_input, "--machine FILE (or --asset ID) is required");
     try {
-        const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
+        const acq::MachineFile machine = [&] {
+            if (o.asset.empty()) return acq::parse_machine_file(read_file(o.machine_file, "machine file"));
+            storage::StoreOptions so;
+            so.recover = false;
+            storage::Store store(existing_db_path(globals), so);
+            return workflow::registered_machine_file(store, o.asset);
+        }();
         const acq::PlanSpec spec =
             o.plan_file.empty() ? acq::default_plan(machine)
                                 : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
@@ -128,8 +137,11 @@ void check_device_uri(const std::string& uri) {
 /// Everything a command line can get wrong, checked before a database is opened: a refused command
 /// line leaves no session and creates no database (docs/cli.md).
 void check_command_line(const MeasureOptions& o) {
-    if (o.resume.empty() && o.machine_file.empty())
-        throw Error(ErrorCategory::bad_input, "--machine FILE is required (or --resume SESSION)");
+    if (o.resume.empty() && o.machine_file.empty() && o.asset.empty())
+        throw Error(ErrorCategory::bad_input, "--machine FILE or --asset ID is required (or --resume SESSION)");
+    if (!o.machine_file.empty() && !o.asset.empty())
+        throw Error(ErrorCategory::bad_input,
+                    "--machine and --asset: give one (a registered machine measures with its registered file)");
     if (o.device.empty()) throw Error(ErrorCategory::bad_input, "--device URI is required");
     check_device_uri(o.device);
     // The terminal operator asks its questions on standard input; a script or a CI job has none to
@@ -141,10 +153,12 @@ void check_command_line(const MeasureOptions& o) {
                     "lines on standard input)");
 }
 
-/// The plan of a new session, from --machine and --plan (exit 2 when either is malformed).
-acq::Plan new_plan(const MeasureOptions& o) {
+/// The plan of a new session, from --machine (or the registry's machine, `registered`) and --plan
+/// (exit 2 when either is malformed).
+acq::Plan new_plan(const MeasureOptions& o, const std::optional<acq::MachineFile>& registered) {
     try {
-        const acq::MachineFile machine = acq::parse_machine_file(read_file(o.machine_file, "machine file"));
+        const acq::MachineFile machine =
+            registered ? *registered : acq::parse_machine_file(read_file(o.machine_file, "machine file"));
         acq::PlanSpec spec = o.plan_file.empty()
                                  ? acq::default_plan(machine)
                                  : acq::parse_plan_file(read_file(o.plan_file, "plan file"), machine.geometry.type);
@@ -185,9 +199,14 @@ int run_measure(const MeasureOptions& o, const Globals& globals) {
         }
         prepared = workflow::resume_ssm_session(*opened, o.resume);
     } else {
-        const acq::Plan plan = new_plan(o);
-        opened = std::make_unique<storage::Store>(resolve_db_path(globals));
-        prepared = workflow::new_ssm_session(*opened, plan, o.device);
+        std::optional<acq::MachineFile> registered;
+        if (!o.asset.empty()) {
+            opened = std::make_unique<storage::Store>(existing_db_path(globals));  // the registry is in it
+            registered = workflow::registered_machine_file(*opened, o.asset);
+        }
+        const acq::Plan plan = new_plan(o, registered);
+        if (!opened) opened = std::make_unique<storage::Store>(resolve_db_path(globals));
+        prepared = workflow::new_ssm_session(*opened, plan, o.device, o.asset);
     }
     storage::Store& store = *opened;
     const std::int64_t id = prepared.id;
@@ -272,6 +291,9 @@ BALLBAR_COMMAND(measure) {
                     "hid:VID:PID, emulator:CONFIG, or a gauge's: sylvac:PATH, ...)");
     sub->add_option("--machine", o->machine_file,
                     "REQUIRED (not with --resume): machine file (ballbar-machine/1 JSON)");
+    sub->add_option("--asset", o->asset,
+                    "the registry's machine (ballbar machines add), instead of --machine: its machine file, and "
+                    "the session listed and trended under it");
     sub->add_option("--plan", o->plan_file, "Plan file (ballbar-plan/1 JSON); default: four tests at one socket");
     sub->add_option("--operator", o->operator_name, "Operator name stored with the session");
     sub->add_option("--resume", o->resume, "Continue an interrupted session (id or uuid prefix)");

@@ -50,7 +50,7 @@ std::size_t text_width(const std::string& text) {
 
 /// The sessions the list's filters keep.
 bool kept(const SessionsOptions& o, const storage::SessionInfo& s) {
-    if (!o.filter_machine.empty() && machine_label(s.machine) != o.filter_machine) return false;
+    if (!o.filter_machine.empty() && machine_label(s) != o.filter_machine) return false;
     if (!o.filter_procedure.empty() &&
         (o.filter_procedure == "circular") != (s.procedure == "circular"))  // ssm: every other procedure
         return false;
@@ -75,7 +75,7 @@ void print_sessions_table(storage::Store& store, const std::vector<storage::Sess
         const std::string started = s.started_at.substr(0, 19);
         std::snprintf(line, sizeof line, "%5lld  %-8s  %-11s  %-24s  %-20s  ", static_cast<long long>(s.id),
                       s.uuid.substr(0, 8).c_str(), std::string(storage::to_string(s.state)).c_str(),
-                      machine_label(s.machine).c_str(), started.c_str());
+                      machine_label(s).c_str(), started.c_str());
         out << line << result << std::string(text_width(result) < 18 ? 18 - text_width(result) : 0, ' ');
         std::snprintf(line, sizeof line, "  %6lld  ", static_cast<long long>(s.point_count));
         out << line << s.operator_name << '\n';
@@ -198,7 +198,7 @@ int show_session(const SessionsOptions& o, const Globals& globals, std::ostream&
     out << "  source      " << storage::to_string(s.source) << '\n'
         << "  procedure   " << s.procedure << '\n'
         << "  operator    " << s.operator_name << '\n'
-        << "  machine     " << machine_label(s.machine) << '\n'
+        << "  machine     " << machine_label(s) << '\n'
         << "  started     " << s.started_at << '\n'
         << "  ended       " << s.ended_at.value_or("-") << '\n';
     if (s.instrument) {

@@ -48,6 +48,11 @@ const std::map<std::string, std::string>& examples() {
         {"monitor",
          "  ballbar monitor --device serial:/dev/ttyACM0 --seconds 2 --json\n"
          "  ballbar monitor --device sylvac:/dev/ttyUSB0\n"},
+        {"machines",
+         "  ballbar machines add M-0042 --machine mill.json --location \"hall 2\" --circularity-tolerance 12\n"
+         "  ballbar machines                             # the registry\n"
+         "  ballbar machines show M-0042 --json\n"
+         "  ballbar measure --asset M-0042 --device serial:/dev/ttyUSB0   # measured, listed, trended under it\n"},
         {"report", "  ballbar report 3 --out s3.pdf\n  ballbar report 3 --json\n"},
         {"serve",
          "  ballbar serve                                # http://127.0.0.1:8230/ on this machine only\n"

@@ -71,7 +71,11 @@ TEST(CliExitCodes, EveryRefusedCommandLineExits2AndCreatesNoDatabase) {
         {"demo --machine XYZ", 2, "XYZ"},
         {"demo --plan missing.plan.json", 2, "missing.plan.json"},
         // measure: refused before any session is stored.
-        {"measure --device emulator: --non-interactive", 2, "--machine FILE is required"},
+        {"measure --device emulator: --non-interactive", 2, "--machine FILE or --asset ID is required"},
+        {"measure --device emulator: --asset M-1 --non-interactive", 2, "no database"},
+        {"machines add M-1 --machine missing-machine.json", 2, "missing-machine.json"},
+        {"machines add M-1 --machine " + d.file("bad-machine.json"), 2, "bad-machine.json"},
+        {"machines show M-1", 2, "no database"},
         {"measure --machine " + machine + " --non-interactive", 2, "--device URI is required"},
         {"measure --device bogus:x --machine " + machine + " --non-interactive", 2, "bad device URI 'bogus:x'"},
         {"measure --device tcp:localhost --machine " + machine + " --non-interactive", 2, "missing HOST:PORT"},
@@ -89,7 +93,7 @@ TEST(CliExitCodes, EveryRefusedCommandLineExits2AndCreatesNoDatabase) {
          2, ""},
         {"measure --device emulator: --machine " + machine + " --plan " + quick, 2, "standard input is not a terminal"},
         {"measure --resume 99 --device emulator: --non-interactive", 2, "no database at"},
-        {"measure --dry-run", 2, "--machine FILE is required"},
+        {"measure --dry-run", 2, "--machine FILE (or --asset ID) is required"},
         // Readers: a database that does not exist is not created.
         {"sessions show 1", 2, "no database at"},
         {"report 1 --out r.pdf", 2, "no database at", {"r.pdf"}},

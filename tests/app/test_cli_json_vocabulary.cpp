@@ -105,6 +105,9 @@ TEST(JsonVocabulary, EveryCommandsJsonFollowsIt) {
         "dv":[0.001,0.002,0.003,0.0001,0.0,0.0]})"));
     expect_vocabulary("monitor", ok("monitor --device emulator: --seconds 0.3 --json"));
     expect_vocabulary("devices", ok("devices --json"));
+    ok("machines add M-1 --machine '" + (kMachines / "tttrr.json").string() + "' --circularity-tolerance 12");
+    expect_vocabulary("machines", ok("machines --json"));
+    expect_vocabulary("machines show", ok("machines show M-1 --json"));
 
     // The procedures' events, one document a line.
     std::string cfg = ballbar::test::slurp(kMachines / "tttrr-emulator.json");

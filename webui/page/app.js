@@ -322,7 +322,7 @@ function fillSelect(sel, values) {
   sel.value = keep;
 }
 
-function machineName(s) { return s.machine.type + (s.machine.name ? ' ' + s.machine.name : ''); }
+function machineName(s) { return s.machine_asset_id || s.machine.type + (s.machine.name ? ' ' + s.machine.name : ''); }
 
 function renderSessions() {
   fillSelect($('f-machine'), sessions.map(machineName));

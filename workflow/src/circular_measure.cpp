@@ -108,8 +108,9 @@ std::int64_t CircularStoreSink::stored(std::uint64_t source_seq) const {
 std::int64_t create_circular_session(storage::Store& store, const circ::TestSpec& test, analysis::NcDialect dialect,
                                      double dwell_s, storage::SessionSource source, const std::string& operator_name,
                                      const std::string& notes, const analysis::MachineGeometry* machine,
-                                     std::optional<double> tolerance_um) {
+                                     std::optional<double> tolerance_um, const std::string& machine_asset) {
     storage::NewSession ns;
+    ns.machine_asset = machine_asset;
     if (machine)
         ns.machine = *machine;
     else
@@ -190,7 +191,7 @@ CircularMeasureResult measure_circular(storage::Store& store, const PreparedCirc
         const std::int64_t id = create_circular_session(
             store, out.test, prepared.dialect, prepared.dwell_s,
             uri.starts_with("emulator:") ? storage::SessionSource::emulator : storage::SessionSource::device,
-            o.operator_name, o.notes, o.machine ? &*o.machine : nullptr, o.tolerance_um);
+            o.operator_name, o.notes, o.machine ? &*o.machine : nullptr, o.tolerance_um, o.machine_asset);
         if (o.on_session_created) o.on_session_created(id, out.test);
         return id;
     };

@@ -648,7 +648,7 @@ acq::MachineFile loop_machine() {
     m.geometry.c_offset_mm = ba::Vec3(0, -20, -110);
     m.geometry.tool_ball_mm = ba::Vec3::Zero();
     m.dialect = ba::NcDialect::LinuxCNC;
-    m.feed_mm_min = 6000;
+    m.feed_mm_min = 12000;
     m.travel[static_cast<std::size_t>(acq::Axis::A)] = {-30, 110};
     return m;
 }

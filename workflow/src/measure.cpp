@@ -10,11 +10,13 @@ namespace ballbar::workflow {
 
 namespace acq = ballbar::acquisition;
 
-PreparedSession new_ssm_session(storage::Store& store, const acq::Plan& plan, std::string_view device_uri) {
+PreparedSession new_ssm_session(storage::Store& store, const acq::Plan& plan, std::string_view device_uri,
+                                const std::string& machine_asset) {
     PreparedSession s;
     s.plan = plan;
     storage::NewSession ns;
     ns.machine = plan.machine.geometry;
+    ns.machine_asset = machine_asset;
     ns.source = device_uri.starts_with("emulator:") ? storage::SessionSource::emulator : storage::SessionSource::device;
     ns.operator_name = plan.spec.answers.operator_name;
     ns.procedure = "ssm-two-step";

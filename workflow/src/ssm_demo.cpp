@@ -117,8 +117,8 @@ TruthCheck check_against_truth(storage::Store& store, std::int64_t id, const dev
 
 SsmDemoResult run_ssm_demo(storage::Store& store, const SsmDemoOptions& o, const SsmDemoEvents& events) {
     SsmDemoResult out;
-    out.machine = acq::seed_machine(o.machine);
-    out.machine.tolerances = o.tolerances;
+    out.machine = o.registered ? *o.registered : acq::seed_machine(o.machine);
+    if (!o.registered || o.tolerances.any()) out.machine.tolerances = o.tolerances;
     acq::PlanSpec spec = o.plan.value_or(acq::default_plan(out.machine));
     spec.answers.operator_name = "demo";
     out.plan = acq::make_plan(out.machine, spec);
@@ -132,7 +132,7 @@ SsmDemoResult run_ssm_demo(storage::Store& store, const SsmDemoOptions& o, const
     // (a pty name can be reused by another one's after a simulated disconnect).
     cfg.instrument.serial = "EMU" + std::to_string(10000 + ::getpid() % 90000);
     cfg.machine.geometry = out.machine.geometry;
-    cfg.machine.errors = acq::demo_errors(o.machine);
+    cfg.machine.errors = acq::demo_errors(out.machine.geometry.type);
     cfg.machine.socket_mm = plan.points.front().socket_mm;
     cfg.machine.start = plan.points.front().pose;
     cfg.faults = o.faults;
@@ -141,6 +141,7 @@ SsmDemoResult run_ssm_demo(storage::Store& store, const SsmDemoOptions& o, const
 
     storage::NewSession ns;
     ns.machine = out.machine.geometry;
+    ns.machine_asset = o.machine_asset;
     ns.source = storage::SessionSource::emulator;
     ns.operator_name = "demo";
     ns.procedure = "ssm-two-step";

@@ -20,6 +20,10 @@ std::string machine_label(const analysis::MachineGeometry& m) {
     return s;
 }
 
+std::string machine_label(const storage::SessionInfo& session) {
+    return session.machine_asset.empty() ? machine_label(session.machine) : session.machine_asset;
+}
+
 namespace {
 
 void circular_figures(const storage::CircularRecord& r, TrendPoint& p) {
@@ -95,7 +99,7 @@ std::string headline(const TrendPoint& p) {
 std::vector<TrendPoint> machine_trend(storage::Store& store, const std::string& machine) {
     std::vector<TrendPoint> out;
     for (const auto& s : store.sessions()) {
-        if (s.state != storage::SessionState::completed || machine_label(s.machine) != machine) continue;
+        if (s.state != storage::SessionState::completed || machine_label(s) != machine) continue;
         TrendPoint p = session_figures(store, s);
         if (!p.figures.empty()) out.push_back(std::move(p));
     }

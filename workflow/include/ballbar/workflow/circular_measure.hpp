@@ -74,11 +74,13 @@ class CircularStoreSink : public acquisition::CircularSink {
 /// program's dialect and dwell (a resume writes the same program).
 /// `machine`: the machine tested (its machine file's geometry and name); none: stored as "circular test".
 /// `tolerance_um`: G allowed (metadata "tolerance_um"), judged when the session's result is stored.
+/// `machine_asset`: the registry's machine tested (`--asset`; `machine` is then its geometry).
 std::int64_t create_circular_session(storage::Store& store, const analysis::circular::TestSpec& test,
                                      analysis::NcDialect dialect, double dwell_s, storage::SessionSource source,
                                      const std::string& operator_name, const std::string& notes,
                                      const analysis::MachineGeometry* machine = nullptr,
-                                     std::optional<double> tolerance_um = std::nullopt);
+                                     std::optional<double> tolerance_um = std::nullopt,
+                                     const std::string& machine_asset = {});
 
 /// A circular session's stored trace analysed as `circle analyze SESSION` does, its result stored with it
 /// (kind "circular"), with the tolerance the session was measured against (metadata "tolerance_um", if
@@ -116,6 +118,8 @@ struct CircularMeasureOptions {
     std::string notes = "circle measure";
     /// The machine tested (`circle measure --machine FILE`): its sessions are listed and trended under it.
     std::optional<analysis::MachineGeometry> machine;
+    /// The registry's machine tested (`circle measure --asset`): `machine` is its geometry.
+    std::string machine_asset;
     /// G allowed, µm (the machine file's tolerances.circularity_um): stored with the session, so its
     /// result (also after a resume) and its report carry the PASS/FAIL verdict.
     std::optional<double> tolerance_um;

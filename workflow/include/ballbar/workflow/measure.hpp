@@ -33,7 +33,9 @@ struct PreparedSession {
 
 /// Creates and starts a session of `plan` (source `emulator` for an `emulator:` URI, else `device`) and
 /// stores the plan with it, so that it can be resumed.
-PreparedSession new_ssm_session(storage::Store& store, const acquisition::Plan& plan, std::string_view device_uri);
+/// `machine_asset`: the registry's machine measured (`measure --asset`); empty: known by its geometry.
+PreparedSession new_ssm_session(storage::Store& store, const acquisition::Plan& plan, std::string_view device_uri,
+                                const std::string& machine_asset = {});
 
 /// Takes up an interrupted session (an id or uuid prefix): its stored plan and points. Error (not found)
 /// when no session matches; Error (bad input) when it has no stored plan, or its state forbids going on

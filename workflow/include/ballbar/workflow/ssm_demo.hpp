@@ -78,6 +78,10 @@ struct SsmDemoOptions {
     device::FaultConfig faults;                 ///< the emulator's faults (docs/emulator.md)
     std::string notes;                          ///< stored with the session
     acquisition::Tolerances tolerances;         ///< the demo machine's, for the verdict (none: no verdict)
+    /// A registered machine (`demo --asset`): the emulated machine has its geometry (the type's demo
+    /// errors) and the session is stored under its asset id; its tolerances judge unless `tolerances` has any.
+    std::optional<acquisition::MachineFile> registered;
+    std::string machine_asset;
     /// The front end's operator (a web page): it answers the questions and is told of each program and
     /// program stop before the emulated machine runs it — the machine waits for the operator as a real
     /// one would. Empty: the plan's answers, at once (the CLI's demo).

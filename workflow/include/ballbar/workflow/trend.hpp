@@ -24,6 +24,9 @@ struct TrendPoint {
 
 /// How a session names its machine in a trend and in the page's filter: "TTTRR mill-1" (type, name).
 std::string machine_label(const analysis::MachineGeometry& machine);
+/// A session's machine: its asset id when it was measured on a registered machine (`--asset`), else
+/// the geometry's label.
+std::string machine_label(const storage::SessionInfo& session);
 
 /// One session's headline figures from its stored results (none when it holds no result).
 TrendPoint session_figures(storage::Store& store, const storage::SessionInfo& session);
