@@ -61,6 +61,10 @@ const std::map<std::string, std::string>& examples() {
         {"sessions",
          "  ballbar sessions\n  ballbar sessions show 3 --json\n  ballbar sessions trend \"TTTRR mill-1\" --json   # "
          "headline figures over months\n"},
+        {"sync",
+         "  ballbar sync \"host=db.plant dbname=ballbar user=station7\"    # results, points, models; PGPASSWORD\n"
+         "  ballbar sync \"postgresql://station7@db.plant/ballbar\" --samples --json   # and the raw samples\n"
+         "  (exit 1 also when ids of this station are on the server under another: conflicts, not merged)\n"},
         {"udev-rules", "  ballbar udev-rules > 70-ballbar-gauges.rules\n  ballbar udev-rules --plugdev\n"},
         {"solve", "  ballbar solve ssm < request.json\n  ballbar solve orientation --input request.json\n"},
     };

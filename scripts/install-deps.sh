@@ -21,6 +21,7 @@ packages=(
   libfmt-dev           # app: output formatting
   libcairo2-dev        # reports: vector PDF
   libcpp-httplib-dev   # webui/: `ballbar serve`'s HTTP server (Server-Sent Events for the live reading)
+  libpq-dev            # fleet/: PostgreSQL's own client library, for `ballbar sync` to a plant's server
   linuxcnc-uspace-dev  # linuxcnc/: LinuxCNC's headers (kinematics.h, hal.h, rtapi.h), the ballbarkins module is built against them
   # tests and benchmarks
   libgtest-dev libgmock-dev   # unit and integration tests
@@ -30,6 +31,7 @@ packages=(
   poppler-utils               # pdftotext/pdfinfo: report tests
   linuxcnc-uspace             # LinuxCNC itself: its headless simulator runs the ballbarkins module's tests
   chromium chromium-driver python3-selenium  # the browser test of `ballbar serve` (headless Chromium, one command: matching versions)
+  postgresql                  # a throwaway PostgreSQL server the fleet tests start and stop (ctest label postgres); psql, their oracle
   clang libclang-rt-14-dev    # libFuzzer targets of every parser (fuzz/, scripts/fuzz.sh)
   # packaging
   help2man                    # man pages generated from the commands' own --help

@@ -9,6 +9,7 @@
 #include "ballbar/analysis/nc_program.hpp"
 #include "ballbar/device/transport.hpp"
 #include "ballbar/fileio/input.hpp"
+#include "ballbar/fleet/pg.hpp"
 #include "ballbar/report/report.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/sqlite.hpp"
@@ -27,6 +28,10 @@ TEST(ErrorCategory, EveryLibrarysErrorsAreSortedOnce) {
     for (SK k : {SK::sqlite, SK::disk_full, SK::corrupt, SK::newer_schema, SK::busy, SK::invalid})
         EXPECT_EQ(category_of(storage::StorageError(k, "x")), C::failed);
     EXPECT_EQ(category_of(storage::FormatError("machine.type")), C::bad_input);
+    EXPECT_EQ(category_of(fleet::FleetError(fleet::FleetError::Kind::bad_conninfo, "holds a password")), C::bad_input);
+    for (auto k : {fleet::FleetError::Kind::connect, fleet::FleetError::Kind::link, fleet::FleetError::Kind::server,
+                   fleet::FleetError::Kind::newer_schema})
+        EXPECT_EQ(category_of(fleet::FleetError(k, "x")), C::failed);
     EXPECT_EQ(category_of(acquisition::PlanError("plan")), C::bad_input);
     EXPECT_EQ(category_of(analysis::NcError(3, "unknown G code")), C::bad_input);
     EXPECT_EQ(category_of(device::DeviceError(device::DeviceErrorKind::Timeout, "no answer")), C::device);

@@ -10,6 +10,7 @@
 #include "ballbar/analysis/types.hpp"
 #include "ballbar/device/transport.hpp"
 #include "ballbar/fileio/input.hpp"
+#include "ballbar/fleet/pg.hpp"
 #include "ballbar/report/report.hpp"
 #include "ballbar/storage/machine_json.hpp"
 #include "ballbar/storage/readings_file.hpp"
@@ -48,6 +49,8 @@ ErrorCategory category_of(const std::exception& e) {
                 return ErrorCategory::failed;
         }
     }
+    if (const auto* x = dynamic_cast<const fleet::FleetError*>(&e))  // a server unreachable, refusing, newer
+        return x->kind() == fleet::FleetError::Kind::bad_conninfo ? ErrorCategory::bad_input : ErrorCategory::failed;
     // A file or document the user gave that is not what it should be.
     if (dynamic_cast<const storage::FormatError*>(&e) || dynamic_cast<const storage::ReadingsFileError*>(&e) ||
         dynamic_cast<const storage::TraceFileError*>(&e) || dynamic_cast<const acquisition::PlanError*>(&e) ||
