@@ -65,6 +65,11 @@ const std::map<std::string, std::string>& examples() {
          "  ballbar sync \"host=db.plant dbname=ballbar user=station7\"    # results, points, models; PGPASSWORD\n"
          "  ballbar sync \"postgresql://station7@db.plant/ballbar\" --samples --json   # and the raw samples\n"
          "  (exit 1 also when ids of this station are on the server under another: conflicts, not merged)\n"},
+        {"trend",
+         "  ballbar trend M-0042                          # this station's sessions of the machine\n"
+         "  ballbar trend M-0042 --from \"host=db.plant dbname=ballbar user=quality\" --since 2026-01-01 --out "
+         "m42.pdf\n"
+         "  ballbar trend M-0042 --json\n"},
         {"udev-rules", "  ballbar udev-rules > 70-ballbar-gauges.rules\n  ballbar udev-rules --plugdev\n"},
         {"solve", "  ballbar solve ssm < request.json\n  ballbar solve orientation --input request.json\n"},
     };

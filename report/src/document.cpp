@@ -12,8 +12,11 @@ constexpr double kTableSize = 7.0;
 constexpr double kRowHeight = 11.5;
 }  // namespace
 
-Document::Document(cairo_surface_t* surface, std::string running_title, int total_pages)
-    : cr_(cairo_create(surface)), running_title_(std::move(running_title)), total_pages_(total_pages) {}
+Document::Document(cairo_surface_t* surface, std::string running_title, int total_pages, std::string kind)
+    : cr_(cairo_create(surface)),
+      running_title_(std::move(running_title)),
+      kind_(std::move(kind)),
+      total_pages_(total_pages) {}
 
 Document::~Document() {
     cairo_destroy(cr_);
@@ -28,7 +31,7 @@ void Document::begin_page() {
     set_font(cr_, 6.5);
     draw_text(cr_, kMargin, kMargin - 14, fit_text(cr_, running_title_, content_width() * 0.7), HAlign::Left,
               VAlign::Baseline);
-    draw_text(cr_, kWidth - kMargin, kMargin - 14, "ballbar session report", HAlign::Right, VAlign::Baseline);
+    draw_text(cr_, kWidth - kMargin, kMargin - 14, kind_, HAlign::Right, VAlign::Baseline);
     cairo_set_line_width(cr_, 0.4);
     cairo_move_to(cr_, kMargin, kMargin - 10);
     cairo_line_to(cr_, kWidth - kMargin, kMargin - 10);

@@ -27,7 +27,8 @@ class Document {
     static constexpr double kMargin = 45;        ///< ≈ 16 mm
 
     /// Draws on `surface` (a PDF surface of A4 size). `total_pages` (0: unknown) goes into the footer.
-    Document(cairo_surface_t* surface, std::string running_title, int total_pages);
+    Document(cairo_surface_t* surface, std::string running_title, int total_pages,
+             std::string kind = "ballbar session report");
     ~Document();
     Document(const Document&) = delete;
     Document& operator=(const Document&) = delete;
@@ -64,6 +65,7 @@ class Document {
 
     cairo_t* cr_;
     std::string running_title_;
+    std::string kind_;  ///< the header's right-hand side: what document this is
     int total_pages_;
     int page_ = 0;
     bool open_ = false;

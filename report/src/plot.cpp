@@ -98,6 +98,11 @@ void Plot::scatter(std::string name, std::vector<double> x, std::vector<double> 
                    bool hollow) {
     series_.push_back({Kind::Scatter, std::move(name), color, radius, hollow, std::move(x), std::move(y), {}, {}, {}});
 }
+void Plot::scatter_errors(std::string name, std::vector<double> x, std::vector<double> y, std::vector<double> errors,
+                          Rgb color, double radius) {
+    series_.push_back(
+        {Kind::Scatter, std::move(name), color, radius, false, std::move(x), std::move(y), std::move(errors), {}, {}});
+}
 void Plot::bands(std::string name, std::vector<std::pair<double, double>> spans, Rgb color) {
     series_.push_back({Kind::Bands, std::move(name), color, 1, false, {}, {}, {}, std::move(spans), {}});
 }
@@ -130,7 +135,11 @@ Plot::Bounds Plot::data_bounds() const {
             case Kind::Line:
             case Kind::Scatter:
                 for (double v : s.x) add_x(v);
-                for (double v : s.y) add_y(v);
+                for (std::size_t i = 0; i < s.y.size(); ++i) {
+                    const double e = i < s.errors.size() ? std::abs(finite_or(s.errors[i], 0)) : 0;
+                    add_y(s.y[i] + e);
+                    add_y(s.y[i] - e);
+                }
                 break;
             case Kind::Bands:
                 for (const auto& [a, c] : s.spans) add_x(a), add_x(c);
@@ -314,6 +323,18 @@ void Plot::draw_series(cairo_t* cr, const Series& s, Rect plot, const Bounds& b,
         }
         case Kind::Scatter:
             cairo_set_line_width(cr, 0.5);
+            for (std::size_t i = 0; i < std::min({s.x.size(), s.y.size(), s.errors.size()}); ++i) {
+                const double e = std::abs(finite_or(s.errors[i], 0));
+                if (e == 0 || !std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+                const double x = px(s.x[i]);  // the error bar: ± e, with caps
+                cairo_move_to(cr, x, py(s.y[i] - e));
+                cairo_line_to(cr, x, py(s.y[i] + e));
+                for (double end : {s.y[i] - e, s.y[i] + e}) {
+                    cairo_move_to(cr, x - 1.8, py(end));
+                    cairo_line_to(cr, x + 1.8, py(end));
+                }
+                cairo_stroke(cr);
+            }
             for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
                 if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
                 cairo_new_sub_path(cr);

@@ -50,6 +50,9 @@ class Plot {
     void line(std::string name, std::vector<double> x, std::vector<double> y, Rgb color, double width = 0.7);
     void scatter(std::string name, std::vector<double> x, std::vector<double> y, Rgb color, double radius = 1.4,
                  bool hollow = false);
+    /// Points with a vertical error bar each (± errors[i], data units; 0 or NaN: none).
+    void scatter_errors(std::string name, std::vector<double> x, std::vector<double> y, std::vector<double> errors,
+                        Rgb color, double radius = 1.8);
     /// Vertical shaded bands [x0, x1] (one legend entry for all).
     void bands(std::string name, std::vector<std::pair<double, double>> spans, Rgb color);
     void arrows(std::string name, std::vector<Arrow> arrows, Rgb color);

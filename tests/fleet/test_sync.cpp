@@ -156,4 +156,29 @@ TEST(PgSync, AnIdOfAnotherStationIsAConflictReportedNotMerged) {
     EXPECT_EQ(pg.psql("SELECT md5(string_agg(t::text, ',')) FROM ballbar.machines t").out, machines);
 }
 
+TEST(PgSync, StationsSyncingAtOnceAndOneStationTwiceAtOnceLoseAndDuplicateNothing) {
+    PgServer pg;
+    BALLBAR_NEED_SERVER(pg);
+    ScratchDir d("fleet");
+    const std::string a = d.file("a.db"), b = d.file("b.db"), c = d.file("c.db");
+    for (const auto& [db, seed] : {std::pair{a, 21}, std::pair{b, 22}, std::pair{c, 23}}) {
+        const auto demo = ballbar_run(db, "demo --test circular --plane XY --seed " + std::to_string(seed));
+        ASSERT_EQ(demo.code, 0) << demo.out;
+    }
+    // Four syncs at once into a server with no schema yet: a twice, b, c; small chunks so they interleave.
+    std::string cmd;
+    for (const std::string& db : {a, a, b, c})
+        cmd += shq(BALLBAR_EXE) + " --db " + shq(db) + " sync " + shq(pg.super()) +
+               " --samples --chunk 1000 >/dev/null 2>&1 & ";
+    cmd += "for j in $(jobs -p); do wait $j || exit 1; done";
+    const auto all = sh("bash -c " + shq(cmd));
+    EXPECT_EQ(all.code, 0) << all.out;
+    EXPECT_EQ(pg.psql("SELECT count(*) FROM ballbar.stations").out, "3\n");
+    for (const std::string& db : {a, b, c}) {
+        const std::string station = ballbar::test::station_uuid(db);
+        EXPECT_EQ(ballbar::test::server_digest(pg, station, true), ballbar::test::station_digest(db, true));
+        EXPECT_EQ(sync_json(db, pg.super()).at("rows_written"), 0);
+    }
+}
+
 }  // namespace
