@@ -108,6 +108,8 @@ TEST(JsonVocabulary, EveryCommandsJsonFollowsIt) {
     ok("machines add M-1 --machine '" + (kMachines / "tttrr.json").string() + "' --circularity-tolerance 12");
     expect_vocabulary("machines", ok("machines --json"));
     expect_vocabulary("machines show", ok("machines show M-1 --json"));
+    ok("demo --asset M-1 --seed 3");
+    expect_vocabulary("trend", ok("trend M-1 --json"));
 
     // The procedures' events, one document a line.
     std::string cfg = ballbar::test::slurp(kMachines / "tttrr-emulator.json");

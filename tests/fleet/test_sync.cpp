@@ -70,11 +70,16 @@ TEST(PgSync, TwoStationsSyncToOneServerAndEachStationsRecordsAreThereExactly) {
     const std::string a = d.file("a.db"), b = d.file("b.db");
     measure_station(a, true, 1);
     measure_station(b, false, 2);
+    for (int i = 0; i < 2; ++i) {  // two versions of a model identified from a's SSM session
+        const auto identified = ballbar_run(a, "identify 1 --name mill-a");
+        ASSERT_EQ(identified.code, 0) << identified.out;
+    }
 
     // Station a as the database's owner: it creates ballbar's schema.
     const json first = sync_json(a, pg.super());
     EXPECT_EQ(first.at("server_schema_created"), true);
     EXPECT_EQ(first.at("sessions_sent"), 2);
+    EXPECT_EQ(first.at("rows").at("models"), 2);
     EXPECT_GT(first.at("rows").at("samples").get<long>(), 10000);
     EXPECT_EQ(first.at("conflicts"), json::array());
     EXPECT_EQ(ballbar::test::vocabulary_violations(first), std::vector<std::string>{}) << first.dump(2);
@@ -98,6 +103,20 @@ TEST(PgSync, TwoStationsSyncToOneServerAndEachStationsRecordsAreThereExactly) {
         EXPECT_EQ(ballbar::test::server_results(pg, station), ballbar::test::station_results(db));
     }
     EXPECT_EQ(pg.psql("SELECT asset_id FROM ballbar.machines WHERE asset_id IS NOT NULL").out, "M-0042\n");
+    // The models, byte for byte, with the sessions they were identified from.
+    EXPECT_EQ(pg.psql("SELECT m.uuid, m.name, m.version, m.created_at, m.params_json, s.uuid FROM ballbar.models m "
+                      "JOIN ballbar.model_sessions x ON x.model_uuid = m.uuid JOIN ballbar.sessions s ON s.uuid = "
+                      "x.session_uuid ORDER BY m.uuid")
+                  .out,
+              ballbar::test::sqlite(a,
+                                    "SELECT m.uuid, m.name, m.version, m.created_at, m.params_json, s.uuid FROM "
+                                    "models m JOIN model_sessions x ON x.model_id = m.id JOIN sessions s ON s.id = "
+                                    "x.session_id ORDER BY m.uuid")
+                  .out);
+    EXPECT_EQ(pg.psql("SELECT count(*) FROM ballbar.models").out, "2\n");
+    EXPECT_EQ(
+        pg.psql("SELECT count(*) FROM ballbar.results WHERE kind = 'identification' AND model_uuid IS NOT NULL").out,
+        "2\n");
 
     // Again: nothing is new, nothing is written, not even a time.
     const std::string before = server_fingerprint(pg);
