@@ -58,6 +58,8 @@ std::string pad(const std::string& text, std::size_t columns) {
 }
 
 int run_trend(const TrendOptions& o, const Globals& globals) {
+    const auto inputs = database_files(globals);
+    if (!o.out.empty()) fileio::check_output(o.out, "--out", inputs);  // before any work
     if (!o.since.empty() && !std::regex_match(o.since, std::regex(R"(\d{4}-\d{2}-\d{2})")))
         throw workflow::Error(workflow::ErrorCategory::bad_input,
                               "--since: '" + o.since + "' is not a date YYYY-MM-DD");
@@ -75,8 +77,10 @@ int run_trend(const TrendOptions& o, const Globals& globals) {
             throw workflow::Error(workflow::ErrorCategory::not_found,
                                   "no completed session of machine \"" + o.machine + "\" holds a result" +
                                       (o.since.empty() ? "" : " since " + o.since) + ": no trend to draw");
-        const int pages = report::render_trend_pdf(t, o.out);
-        std::cerr << "wrote " << o.out << " (" << pages << " pages)\n";
+        int pages = 0;
+        const std::string pdf = report::render_trend_pdf_bytes(t, &pages);
+        write_output(o.out, "--out", pdf, inputs);
+        std::cerr << "ballbar: wrote " << o.out << " (" << pages << (pages == 1 ? " page" : " pages") << ")\n";
     }
     if (o.json) {
         std::cout << workflow::trend_document_json(t) << '\n';

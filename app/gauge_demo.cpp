@@ -17,7 +17,7 @@ namespace ballbar::app {
 int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     namespace gg = ballbar::device::gauge;
     namespace ba = ballbar::analysis;
-    using ojson = nlohmann::ordered_json;
+    using demo_json = nlohmann::ordered_json;
     const auto kind = gg::parse_kind(o.instrument);
     if (!kind) throw Error(ErrorCategory::bad_input, "--instrument must be sylvac, mitutoyo-itn, digimatic or modbus");
     const auto type = ba::parse_machine_type(o.machine);
@@ -40,19 +40,19 @@ int run_gauge_demo(const GaugeDemoOptions& o, const std::string& db_path) {
     };
     const workflow::GaugeDemoResult r = workflow::run_gauge_demo(store, demo);
 
-    ojson out;
+    demo_json out;
     out["session"] = r.session;
     out["machine"] = o.machine;
-    out["instrument"] = ojson::parse(r.instrument_json);
-    out["locations"] = ojson::array();
+    out["instrument"] = demo_json::parse(r.instrument_json);
+    out["locations"] = demo_json::array();
     for (const auto& l : r.locations)
         out["locations"].push_back({{"test", l.test},
                                     {"step", l.step},
                                     {"e_mm", vec3_json(l.measured_mm)},
                                     {"true_e_mm", vec3_json(l.true_mm)}});
-    out["orientation"] = ojson::array();
+    out["orientation"] = demo_json::array();
     for (const auto& t : r.orientation) {
-        ojson oj = {{"test", t.test}, {"kind", std::string(acquisition::to_string(t.kind))}};
+        demo_json oj = {{"test", t.test}, {"kind", std::string(acquisition::to_string(t.kind))}};
         put_angles(oj, "", "", t.measured, *type, t.kind);
         put_angles(oj, "true_", "", t.truth, *type, t.kind);
         out["orientation"].push_back(std::move(oj));

@@ -1,9 +1,14 @@
 // SPDX-License-Identifier: MIT
 #include "document.hpp"
 
+#include <cairo-pdf.h>
+
 #include <algorithm>
+#include <memory>
 #include <numeric>
 #include <string>
+
+#include "ballbar/report/report.hpp"
 
 namespace ballbar::report {
 
@@ -191,6 +196,45 @@ void Document::verdict_line(const std::string& text, Rgb color) {
     set_font(cr(), 10.5, true);
     draw_text(cr(), area.x, area.y + 8, fit_text(cr(), text, area.w), HAlign::Left, VAlign::Middle);
     set_color(cr(), kBlack);
+}
+
+namespace {
+
+using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+
+cairo_status_t discard_pdf(void*, const unsigned char*, unsigned int) {
+    return CAIRO_STATUS_SUCCESS;
+}
+
+cairo_status_t append_pdf(void* closure, const unsigned char* data, unsigned int length) {
+    static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
+    return CAIRO_STATUS_SUCCESS;
+}
+
+}  // namespace
+
+std::string two_pass_pdf(const std::function<int(cairo_surface_t*, int)>& layout, const std::string& title,
+                         const std::string& creator, int* pages_out) {
+    SurfacePtr counting(cairo_pdf_surface_create_for_stream(discard_pdf, nullptr, Document::kWidth, Document::kHeight),
+                        cairo_surface_destroy);
+    const int pages = layout(counting.get(), 0);
+    cairo_surface_finish(counting.get());
+
+    std::string pdf;
+    SurfacePtr surface(cairo_pdf_surface_create_for_stream(append_pdf, &pdf, Document::kWidth, Document::kHeight),
+                       cairo_surface_destroy);
+    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
+        throw ReportError(std::string("cannot render the PDF: ") +
+                          cairo_status_to_string(cairo_surface_status(surface.get())));
+    cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_TITLE, title.c_str());
+    cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATOR, creator.c_str());
+    const int written = layout(surface.get(), pages);
+    cairo_surface_finish(surface.get());
+    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
+        throw ReportError(std::string("cannot render the PDF: ") +
+                          cairo_status_to_string(cairo_surface_status(surface.get())));
+    if (pages_out) *pages_out = written;
+    return pdf;
 }
 
 }  // namespace ballbar::report

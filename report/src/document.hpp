@@ -6,6 +6,7 @@
 
 #include <cairo.h>
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -71,5 +72,10 @@ class Document {
     bool open_ = false;
     double y_ = 0;
 };
+
+/// A PDF of A4 pages laid out twice by `layout(surface, total_pages)` (returning its pages): into nowhere
+/// to count the pages, then into memory with the count in every footer. Throws ReportError when cairo fails.
+std::string two_pass_pdf(const std::function<int(cairo_surface_t*, int)>& layout, const std::string& title,
+                         const std::string& creator, int* pages = nullptr);
 
 }  // namespace ballbar::report

@@ -304,44 +304,12 @@ int layout(cairo_surface_t* surface, const Report& r, int total_pages) {
     return doc.finish();
 }
 
-using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
-
-cairo_status_t discard(void*, const unsigned char*, unsigned int) {
-    return CAIRO_STATUS_SUCCESS;
-}
-
-cairo_status_t append(void* closure, const unsigned char* data, unsigned int length) {
-    static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
-    return CAIRO_STATUS_SUCCESS;
-}
-
 }  // namespace
 
 std::string render_pdf_bytes(const Report& report, int* pages_out) {
-    // First pass into nowhere to count the pages for the footers, second pass into memory.
-    SurfacePtr counting(cairo_pdf_surface_create_for_stream(discard, nullptr, Document::kWidth, Document::kHeight),
-                        cairo_surface_destroy);
-    const int pages = layout(counting.get(), report, 0);
-    cairo_surface_finish(counting.get());
-
-    std::string pdf;
-    SurfacePtr surface(cairo_pdf_surface_create_for_stream(append, &pdf, Document::kWidth, Document::kHeight),
-                       cairo_surface_destroy);
-    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
-        throw ReportError(std::string("cannot render the PDF: ") +
-                          cairo_status_to_string(cairo_surface_status(surface.get())));
-    cairo_pdf_surface_set_metadata(
-        surface.get(), CAIRO_PDF_METADATA_TITLE,
-        ("Ball-bar session report, session " + std::to_string(report.header.session_id)).c_str());
-    cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATOR,
-                                   ("ballbar " + report.header.software_version).c_str());
-    const int written = layout(surface.get(), report, pages);
-    cairo_surface_finish(surface.get());
-    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
-        throw ReportError(std::string("cannot render the PDF: ") +
-                          cairo_status_to_string(cairo_surface_status(surface.get())));
-    if (pages_out) *pages_out = written;
-    return pdf;
+    return two_pass_pdf([&](cairo_surface_t* surface, int total) { return layout(surface, report, total); },
+                        "Ball-bar session report, session " + std::to_string(report.header.session_id),
+                        "ballbar " + report.header.software_version, pages_out);
 }
 
 int render_pdf(const Report& report, const std::string& path) {

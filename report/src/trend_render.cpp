@@ -4,9 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <memory>
 
-#include "ballbar/fileio/output.hpp"
 #include "ballbar/report/report.hpp"
 #include "ballbar/report/trend.hpp"
 #include "document.hpp"
@@ -109,40 +107,12 @@ int trend_layout(cairo_surface_t* surface, const TrendDocument& t, int total_pag
     return doc.finish();
 }
 
-using TrendSurface = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
-
-cairo_status_t append_trend_bytes(void* closure, const unsigned char* data, unsigned int length) {
-    static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
-    return CAIRO_STATUS_SUCCESS;
-}
-
 }  // namespace
 
-int render_trend_pdf(const TrendDocument& t, const std::string& path) {
+std::string render_trend_pdf_bytes(const TrendDocument& t, int* pages) {
     if (t.series.empty()) throw ReportError("no figure to plot: the machine has no completed session with results");
-    std::string scratch, pdf;
-    TrendSurface counting(
-        cairo_pdf_surface_create_for_stream(append_trend_bytes, &scratch, Document::kWidth, Document::kHeight),
-        cairo_surface_destroy);
-    const int pages = trend_layout(counting.get(), t, 0);
-    cairo_surface_finish(counting.get());
-    TrendSurface surface(
-        cairo_pdf_surface_create_for_stream(append_trend_bytes, &pdf, Document::kWidth, Document::kHeight),
-        cairo_surface_destroy);
-    cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_TITLE, ("Trend of machine " + t.machine).c_str());
-    cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATOR,
-                                   ("ballbar " + t.software_version).c_str());
-    trend_layout(surface.get(), t, pages);
-    cairo_surface_finish(surface.get());
-    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
-        throw ReportError(std::string("cannot render the PDF: ") +
-                          cairo_status_to_string(cairo_surface_status(surface.get())));
-    try {
-        fileio::write_file(path, "--out", pdf);
-    } catch (const fileio::FileError& e) {
-        throw ReportError(e.what());
-    }
-    return pages;
+    return two_pass_pdf([&](cairo_surface_t* surface, int total) { return trend_layout(surface, t, total); },
+                        "Trend of machine " + t.machine, "ballbar " + t.software_version, pages);
 }
 
 }  // namespace ballbar::report

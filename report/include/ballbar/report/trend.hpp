@@ -43,8 +43,8 @@ struct TrendDocument {
     std::vector<TrendSeries> series;
 };
 
-/// Writes the trend as a PDF (A4): a summary table (figure, sessions, latest, tolerance, drift, flag),
-/// then one plot a figure. Returns the pages. Throws ReportError when the file cannot be written.
-int render_trend_pdf(const TrendDocument& trend, const std::string& path);
+/// The trend as a PDF (A4): a summary table (figure, sessions, latest, tolerance, drift, flag), then one
+/// plot a figure. Throws ReportError for a trend without a figure.
+std::string render_trend_pdf_bytes(const TrendDocument& trend, int* pages = nullptr);
 
 }  // namespace ballbar::report
