@@ -87,7 +87,15 @@ std::int64_t Result::affected() const {
 
 Connection::Connection(const std::string& conninfo) : c_(nullptr) {
     check_conninfo(conninfo);
-    c_ = PQconnectdb(conninfo.c_str());
+    // Never a hang, whatever the link does: a server that does not answer is given up after 10 s, and a
+    // link that dies mid-sync (no reset ever arrives) is found by TCP keepalives and the user timeout
+    // within about half a minute. The connection string's own settings (and PG* variables) come after
+    // and win over these defaults.
+    const char* keys[] = {"connect_timeout",           "keepalives",       "keepalives_idle",
+                          "keepalives_interval",       "keepalives_count", "tcp_user_timeout",
+                          "fallback_application_name", "dbname",           nullptr};
+    const char* values[] = {"10", "1", "10", "5", "3", "30000", "ballbar", conninfo.c_str(), nullptr};
+    c_ = PQconnectdbParams(keys, values, /*expand_dbname=*/1);
     if (!c_) throw FleetError(FleetError::Kind::connect, "cannot connect to the PostgreSQL server: out of memory");
     if (PQstatus(c_) != CONNECTION_OK) {
         const std::string why = one_line(PQerrorMessage(c_));
