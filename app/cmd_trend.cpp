@@ -95,13 +95,13 @@ int run_trend(const TrendOptions& o, const Globals& globals) {
     }
     out << "machine " << o.machine << ": " << t.sessions << " completed sessions, " << t.first_at.substr(0, 10)
         << " to " << t.last_at.substr(0, 10) << " (" << t.source << ")\n";
-    out << "  " << pad("figure", 26) << pad("n", 4) << pad("latest", 18) << pad("tolerance", 11)
+    out << "  " << pad("figure", 27) << pad("n", 4) << pad("latest", 18) << pad("tolerance", 11)
         << pad("slope a year", 18) << "flag\n";
     for (const auto& s : t.series) {
         const auto& last = s.values.back();
         char tol[32] = "-";
         if (s.tolerance) std::snprintf(tol, sizeof tol, "%g", *s.tolerance);
-        out << "  " << pad(s.label + " (" + s.unit + ")", 26) << pad(std::to_string(s.values.size()), 4)
+        out << "  " << pad(s.label + " (" + s.unit + ")", 27) << pad(std::to_string(s.values.size()), 4)
             << pad(value_text(last.value, last.value_std), 18) << pad(tol, 11)
             << pad(s.slope_per_year ? value_text(*s.slope_per_year, s.slope_per_year_std) : "-", 18) << s.flag << '\n';
     }

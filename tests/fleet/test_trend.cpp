@@ -68,6 +68,8 @@ TEST(PgTrend, TheServersTrendHoldsEveryStationsSessionsWithTheSameFigures) {
     const std::string a = d.file("a.db"), b = d.file("b.db");
     station(a, 1, "2026-01-10T08:00:00.000Z", 0);
     station(b, 4, "2026-02-10T08:00:00.000Z", 0.05);  // the other station sees the machine drift
+    for (const char* id : {"1", "2", "3"})            // a's sessions identified: their parameters join the trend
+        ASSERT_EQ(bb(a, std::string("identify ") + id).code, 0);
     ASSERT_EQ(bb(a, "sync " + shq(pg.super())).code, 0);
     ASSERT_EQ(bb(b, "sync " + shq(pg.super())).code, 0);
 
@@ -93,6 +95,14 @@ TEST(PgTrend, TheServersTrendHoldsEveryStationsSessionsWithTheSameFigures) {
     EXPECT_EQ(by_key["dV_max_um"].at("tolerance"), 80.0);
     EXPECT_EQ(by_key["d_alpha_arcsec"].at("tolerance"), 60.0);
     EXPECT_GT(by_key["dV_max_um"].at("points").at(0).at("value_std").get<double>(), 0);
+    int identified = 0;
+    for (const auto& [key, f] : by_key)
+        if (f.at("label").get<std::string>().ends_with("(identified)")) {
+            ++identified;
+            EXPECT_EQ(f.at("points").size(), 3u) << key << ": a's three sessions";
+            EXPECT_GT(f.at("points").at(0).at("value_std").get<double>(), 0) << key;
+        }
+    EXPECT_GE(identified, 2) << server.dump(1);
     // Station a's |ΔV| is steady; b's grows 5 % every two months toward its 80 µm: flagged.
     EXPECT_TRUE(la.at("figures").at(0).at("flag").is_null()) << la.at("figures").at(0).dump();
     EXPECT_EQ(lb.at("figures").at(0).at("flag"), "drifting toward tolerance") << lb.at("figures").at(0).dump();
