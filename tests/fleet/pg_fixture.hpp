@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
@@ -38,6 +39,17 @@ inline std::string shq(const std::string& s) {
     std::string q = "'";
     for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return q + "'";
+}
+
+/// `ENV ballbar --db DB ARGS`: its exit code, and its standard output and error together.
+inline Sh ballbar_cli(const std::string& db, const std::string& args, const std::string& env = "") {
+    return sh(env + " " + shq(BALLBAR_EXE) + " --db " + shq(db) + " " + args + " 2>&1");
+}
+
+/// The JSON document in a command's output (after any words it wrote on standard error); null when none.
+inline nlohmann::json json_in(const Sh& r) {
+    const auto at = r.out.find('{');
+    return at == std::string::npos ? nlohmann::json() : nlohmann::json::parse(r.out.substr(at), nullptr, false);
 }
 
 /// A PostgreSQL server of this test's own, gone when it ends.

@@ -14,6 +14,7 @@
 
 namespace {
 
+using ballbar::test::json_in;
 using ballbar::test::PgServer;
 using ballbar::test::ScratchDir;
 using ballbar::test::sh;
@@ -22,17 +23,11 @@ using nlohmann::json;
 
 const std::string kMachines = std::string(BALLBAR_TEST_DATA_DIR) + "/machines/";
 
-/// `ballbar --db DB ARGS` with `env` before it; stdout in .out, stderr appended after a line "--stderr--".
-ballbar::test::Sh ballbar_run(const std::string& db, const std::string& args, const std::string& env = "") {
-    return sh(env + " " + shq(BALLBAR_EXE) + " --db " + shq(db) + " " + args + " 2>&1");
-}
-
 json sync_json(const std::string& db, const std::string& conninfo, const std::string& env = "",
                const std::string& more = " --samples") {
-    const auto r = ballbar_run(db, "sync " + shq(conninfo) + more + " --json", env);
+    const auto r = ballbar::test::ballbar_cli(db, "sync " + shq(conninfo) + more + " --json", env);
     EXPECT_EQ(r.code, 0) << r.out;
-    const auto start = r.out.find('{');
-    return start == std::string::npos ? json() : json::parse(r.out.substr(start), nullptr, false);
+    return json_in(r);
 }
 
 /// Everything on the server as one checksum: a sync that changes nothing leaves it as it was (times included).
@@ -50,16 +45,17 @@ std::string server_fingerprint(const PgServer& pg) {
 
 void measure_station(const std::string& db, bool registered, int seed) {
     if (registered) {
-        const auto add =
-            ballbar_run(db, "machines add M-0042 --machine " + shq(kMachines + "tttrr.json") + " --location 'hall 2'");
+        const auto add = ballbar::test::ballbar_cli(
+            db, "machines add M-0042 --machine " + shq(kMachines + "tttrr.json") + " --location 'hall 2'");
         ASSERT_EQ(add.code, 0) << add.out;
-        const auto demo = ballbar_run(db, "demo --asset M-0042 --seed " + std::to_string(seed));
+        const auto demo = ballbar::test::ballbar_cli(db, "demo --asset M-0042 --seed " + std::to_string(seed));
         ASSERT_EQ(demo.code, 0) << demo.out;
     } else {
-        const auto demo = ballbar_run(db, "demo --machine RRTTT --seed " + std::to_string(seed));
+        const auto demo = ballbar::test::ballbar_cli(db, "demo --machine RRTTT --seed " + std::to_string(seed));
         ASSERT_EQ(demo.code, 0) << demo.out;
     }
-    const auto circle = ballbar_run(db, "demo --test circular --plane XY --seed " + std::to_string(seed));
+    const auto circle =
+        ballbar::test::ballbar_cli(db, "demo --test circular --plane XY --seed " + std::to_string(seed));
     ASSERT_EQ(circle.code, 0) << circle.out;
 }
 
@@ -71,7 +67,7 @@ TEST(PgSync, TwoStationsSyncToOneServerAndEachStationsRecordsAreThereExactly) {
     measure_station(a, true, 1);
     measure_station(b, false, 2);
     for (int i = 0; i < 2; ++i) {  // two versions of a model identified from a's SSM session
-        const auto identified = ballbar_run(a, "identify 1 --name mill-a");
+        const auto identified = ballbar::test::ballbar_cli(a, "identify 1 --name mill-a");
         ASSERT_EQ(identified.code, 0) << identified.out;
     }
 
@@ -129,7 +125,7 @@ TEST(PgSync, TwoStationsSyncToOneServerAndEachStationsRecordsAreThereExactly) {
     EXPECT_EQ(server_fingerprint(pg), before);
 
     // A new session on a, notes on an old one: exactly that goes.
-    const auto demo = ballbar_run(a, "demo --asset M-0042 --seed 3");
+    const auto demo = ballbar::test::ballbar_cli(a, "demo --asset M-0042 --seed 3");
     ASSERT_EQ(demo.code, 0) << demo.out;
     ASSERT_EQ(ballbar::test::sqlite(a, "UPDATE sessions SET notes = 'probe re-seated' WHERE id = 1").code, 0);
     const json third = sync_json(a, pg.super(), "", "");  // results and models only, this time
@@ -148,7 +144,7 @@ TEST(PgSync, AnIdOfAnotherStationIsAConflictReportedNotMerged) {
     BALLBAR_NEED_SERVER(pg);
     ScratchDir d("fleet");
     const std::string a = d.file("a.db"), copy = d.file("copy.db");
-    const auto demo = ballbar_run(a, "demo --test circular --plane XY --seed 4");
+    const auto demo = ballbar::test::ballbar_cli(a, "demo --test circular --plane XY --seed 4");
     ASSERT_EQ(demo.code, 0) << demo.out;
     ASSERT_EQ(sync_json(a, pg.super()).at("sessions_sent"), 1);
     // A station made by copying another's file, then given its own id: its session's uuid is a's.
@@ -159,7 +155,7 @@ TEST(PgSync, AnIdOfAnotherStationIsAConflictReportedNotMerged) {
                   .code,
               0);
     const std::string machines = pg.psql("SELECT md5(string_agg(t::text, ',')) FROM ballbar.machines t").out;
-    const auto r = ballbar_run(copy, "sync " + shq(pg.super()) + " --samples");
+    const auto r = ballbar::test::ballbar_cli(copy, "sync " + shq(pg.super()) + " --samples");
     EXPECT_EQ(r.code, 1) << r.out;
     EXPECT_NE(r.out.find("under another station"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("session " + ballbar::test::sqlite(a, "SELECT uuid FROM sessions").out.substr(0, 36)),
@@ -181,7 +177,8 @@ TEST(PgSync, StationsSyncingAtOnceAndOneStationTwiceAtOnceLoseAndDuplicateNothin
     ScratchDir d("fleet");
     const std::string a = d.file("a.db"), b = d.file("b.db"), c = d.file("c.db");
     for (const auto& [db, seed] : {std::pair{a, 21}, std::pair{b, 22}, std::pair{c, 23}}) {
-        const auto demo = ballbar_run(db, "demo --test circular --plane XY --seed " + std::to_string(seed));
+        const auto demo =
+            ballbar::test::ballbar_cli(db, "demo --test circular --plane XY --seed " + std::to_string(seed));
         ASSERT_EQ(demo.code, 0) << demo.out;
     }
     // Four syncs at once into a server with no schema yet: a twice, b, c; small chunks so they interleave.

@@ -24,14 +24,12 @@
 
 namespace {
 
+using ballbar::test::ballbar_cli;
+using ballbar::test::json_in;
 using ballbar::test::PgServer;
 using ballbar::test::ScratchDir;
 using ballbar::test::sh;
 using ballbar::test::shq;
-
-ballbar::test::Sh cli(const std::string& db, const std::string& args, const std::string& env = "") {
-    return sh(env + " " + shq(BALLBAR_EXE) + " --db " + shq(db) + " " + args + " 2>&1");
-}
 
 /// The station's whole content, as sqlite3 dumps it.
 std::string dump(const std::string& db) {
@@ -39,7 +37,7 @@ std::string dump(const std::string& db) {
 }
 
 void make_station(const std::string& db, int seed) {
-    const auto demo = cli(db, "demo --test circular --plane XY --seed " + std::to_string(seed));
+    const auto demo = ballbar_cli(db, "demo --test circular --plane XY --seed " + std::to_string(seed));
     ASSERT_EQ(demo.code, 0) << demo.out;
 }
 
@@ -52,32 +50,33 @@ TEST(PgSyncFaults, AServerThatCannotBeUsedIsNamedAndTheStationIsUntouched) {
     ASSERT_EQ(pg.psql("CREATE ROLE station LOGIN PASSWORD 'right'").code, 0);
     const std::string before = dump(db);
 
-    const auto unreachable = cli(db, "sync 'host=127.0.0.1 port=1 dbname=ballbar connect_timeout=5'");
+    const auto unreachable = ballbar_cli(db, "sync 'host=127.0.0.1 port=1 dbname=ballbar connect_timeout=5'");
     EXPECT_EQ(unreachable.code, 1) << unreachable.out;
     EXPECT_NE(unreachable.out.find("cannot connect to the PostgreSQL server"), std::string::npos) << unreachable.out;
     EXPECT_NE(unreachable.out.find("Connection refused"), std::string::npos) << unreachable.out;
 
-    const auto wrong = cli(db, "sync " + shq(pg.tcp("station")), "PGPASSWORD=wrong");
+    const auto wrong = ballbar_cli(db, "sync " + shq(pg.tcp("station")), "PGPASSWORD=wrong");
     EXPECT_EQ(wrong.code, 1) << wrong.out;
     EXPECT_NE(wrong.out.find("password authentication failed for user \"station\""), std::string::npos) << wrong.out;
 
-    const auto on_line = cli(db, "sync " + shq(pg.tcp("station") + " password=right"));
+    const auto on_line = ballbar_cli(db, "sync " + shq(pg.tcp("station") + " password=right"));
     EXPECT_EQ(on_line.code, 2) << on_line.out;
     EXPECT_NE(on_line.out.find("holds a password: give it in PGPASSWORD or ~/.pgpass"), std::string::npos)
         << on_line.out;
-    const auto uri = cli(db, "sync 'postgresql://station:right@127.0.0.1:" + std::to_string(pg.port) + "/postgres'");
+    const auto uri =
+        ballbar_cli(db, "sync 'postgresql://station:right@127.0.0.1:" + std::to_string(pg.port) + "/postgres'");
     EXPECT_EQ(uri.code, 2) << uri.out;
 
-    const auto garbled = cli(db, "sync 'host=127.0.0.1 port'");
+    const auto garbled = ballbar_cli(db, "sync 'host=127.0.0.1 port'");
     EXPECT_EQ(garbled.code, 2) << garbled.out;
     EXPECT_NE(garbled.out.find("the connection string cannot be used"), std::string::npos) << garbled.out;
 
     // A server a newer ballbar migrated: refused before anything is sent.
-    ASSERT_EQ(cli(db, "sync " + shq(pg.super())).code, 0);
+    ASSERT_EQ(ballbar_cli(db, "sync " + shq(pg.super())).code, 0);
     ASSERT_EQ(pg.psql("UPDATE ballbar.schema_info SET version = 99").code, 0);
     make_station(db, 6);
     const std::string grown = dump(db);
-    const auto newer = cli(db, "sync " + shq(pg.super()));
+    const auto newer = ballbar_cli(db, "sync " + shq(pg.super()));
     EXPECT_EQ(newer.code, 1) << newer.out;
     EXPECT_NE(newer.out.find("server schema version 99, newer than this ballbar's (1)"), std::string::npos)
         << newer.out;
@@ -165,8 +164,8 @@ TEST(PgSyncFaults, TheNetworkCutMidCopyLosesOnlyTheChunkInFlight) {
     const std::string before = dump(db);
     {
         CuttingRelay relay(pg.port, 1500000);  // past the records, in the samples
-        const auto r = cli(db, "sync " + shq(pg.tcp("station", relay.port)) + " --samples --chunk 5000",
-                           "PGPASSWORD=pw timeout 60");
+        const auto r = ballbar_cli(db, "sync " + shq(pg.tcp("station", relay.port)) + " --samples --chunk 5000",
+                                   "PGPASSWORD=pw timeout 60");
         EXPECT_TRUE(relay.cut) << "the relay saw only " << relay.sent << " bytes: " << r.out;
         EXPECT_EQ(r.code, 1) << r.out;
         EXPECT_NE(r.out.find("the connection to the PostgreSQL server broke"), std::string::npos) << r.out;
@@ -176,9 +175,9 @@ TEST(PgSyncFaults, TheNetworkCutMidCopyLosesOnlyTheChunkInFlight) {
     EXPECT_GT(partial, 0) << "chunks committed before the cut stay";
     EXPECT_EQ(partial % 5000, 0) << "whole chunks only";
     // The next sync continues from the server's mark.
-    const auto resumed = cli(db, "sync " + shq(pg.tcp("station")) + " --samples --json", "PGPASSWORD=pw");
+    const auto resumed = ballbar_cli(db, "sync " + shq(pg.tcp("station")) + " --samples --json", "PGPASSWORD=pw");
     ASSERT_EQ(resumed.code, 0) << resumed.out;
-    const auto report = nlohmann::json::parse(resumed.out.substr(resumed.out.find('{')));
+    const auto report = json_in(resumed);
     const long total = std::stol(ballbar::test::sqlite(db, "SELECT count(*) FROM samples").out);
     EXPECT_EQ(report.at("rows").at("samples").get<long>(), total - partial);
     const std::string station = ballbar::test::station_uuid(db);
@@ -197,7 +196,7 @@ TEST(PgSyncFaults, KilledAtRandomWhileTheStationMeasuresAndTheFinalSyncIsExact) 
     std::atomic<int> measured{0};
     std::thread station([&] {
         for (int seed = 10; !done; ++seed)
-            if (cli(db, "demo --test circular --plane XY --seed " + std::to_string(seed)).code == 0) ++measured;
+            if (ballbar_cli(db, "demo --test circular --plane XY --seed " + std::to_string(seed)).code == 0) ++measured;
     });
     std::mt19937 rng(20261206);
     const char* faults[] = {"client killed", "backend terminated", "server crashed"};
@@ -230,14 +229,14 @@ TEST(PgSyncFaults, KilledAtRandomWhileTheStationMeasuresAndTheFinalSyncIsExact) 
     station.join();
     EXPECT_GT(measured.load(), 0) << "the station measured during the campaign";
     EXPECT_GT(interrupted, 2) << "the faults hit syncs in flight";
-    const auto last = cli(db, "sync " + shq(pg.super()) + " --samples");
+    const auto last = ballbar_cli(db, "sync " + shq(pg.super()) + " --samples");
     ASSERT_EQ(last.code, 0) << last.out;
     const std::string station_id = ballbar::test::station_uuid(db);
     EXPECT_EQ(ballbar::test::server_digest(pg, station_id, true), ballbar::test::station_digest(db, true));
     EXPECT_EQ(ballbar::test::server_results(pg, station_id), ballbar::test::station_results(db));
-    const auto again = cli(db, "sync " + shq(pg.super()) + " --samples --json");
+    const auto again = ballbar_cli(db, "sync " + shq(pg.super()) + " --samples --json");
     ASSERT_EQ(again.code, 0) << again.out;
-    EXPECT_EQ(nlohmann::json::parse(again.out.substr(again.out.find('{'))).at("rows_written"), 0);
+    EXPECT_EQ(json_in(again).at("rows_written"), 0);
 }
 
 }  // namespace

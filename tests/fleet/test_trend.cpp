@@ -16,30 +16,24 @@
 
 namespace {
 
+using ballbar::test::ballbar_cli;
+using ballbar::test::json_in;
 using ballbar::test::PgServer;
 using ballbar::test::ScratchDir;
 using ballbar::test::sh;
 using ballbar::test::shq;
 using nlohmann::json;
 
-ballbar::test::Sh bb(const std::string& db, const std::string& args) {
-    return sh(shq(BALLBAR_EXE) + " --db " + shq(db) + " " + args + " 2>&1");
-}
-
-json json_of(const ballbar::test::Sh& r) {
-    const auto at = r.out.find('{');
-    return at == std::string::npos ? json() : json::parse(r.out.substr(at), nullptr, false);
-}
-
 /// A station that measured M-0042 three times, its sessions moved `months` apart starting `first`
 /// (sqlite3, as if measured then), and its ΔV grown by `growth` (a fraction) a session.
 void station(const std::string& db, int seed, const std::string& first, double growth) {
     const std::string machines = std::string(BALLBAR_TEST_DATA_DIR) + "/machines/";
-    ASSERT_EQ(bb(db, "machines add M-0042 --machine " + shq(machines + "tttrr.json") +
-                         " --location-tolerance 80 --angle-tolerance 60")
+    ASSERT_EQ(ballbar_cli(db, "machines add M-0042 --machine " + shq(machines + "tttrr.json") +
+                                  " --location-tolerance 80 --angle-tolerance 60")
                   .code,
               0);
-    for (int i = 0; i < 3; ++i) ASSERT_EQ(bb(db, "demo --asset M-0042 --seed " + std::to_string(seed + i)).code, 0);
+    for (int i = 0; i < 3; ++i)
+        ASSERT_EQ(ballbar_cli(db, "demo --asset M-0042 --seed " + std::to_string(seed + i)).code, 0);
     ASSERT_EQ(
         ballbar::test::sqlite(
             db, "UPDATE sessions SET started_at = strftime('%Y-%m-%dT%H:%M:%fZ', '" + first +
@@ -69,14 +63,14 @@ TEST(PgTrend, TheServersTrendHoldsEveryStationsSessionsWithTheSameFigures) {
     station(a, 1, "2026-01-10T08:00:00.000Z", 0);
     station(b, 4, "2026-02-10T08:00:00.000Z", 0.05);  // the other station sees the machine drift
     for (const char* id : {"1", "2", "3"})            // a's sessions identified: their parameters join the trend
-        ASSERT_EQ(bb(a, std::string("identify ") + id).code, 0);
-    ASSERT_EQ(bb(a, "sync " + shq(pg.super())).code, 0);
-    ASSERT_EQ(bb(b, "sync " + shq(pg.super())).code, 0);
+        ASSERT_EQ(ballbar_cli(a, std::string("identify ") + id).code, 0);
+    ASSERT_EQ(ballbar_cli(a, "sync " + shq(pg.super())).code, 0);
+    ASSERT_EQ(ballbar_cli(b, "sync " + shq(pg.super())).code, 0);
 
-    const json la = json_of(bb(a, "trend M-0042 --json")), lb = json_of(bb(b, "trend M-0042 --json"));
-    const auto server_run = bb(a, "trend M-0042 --json --from " + shq(pg.super()));
+    const json la = json_in(ballbar_cli(a, "trend M-0042 --json")), lb = json_in(ballbar_cli(b, "trend M-0042 --json"));
+    const auto server_run = ballbar_cli(a, "trend M-0042 --json --from " + shq(pg.super()));
     ASSERT_EQ(server_run.code, 0) << server_run.out;
-    const json server = json_of(server_run);
+    const json server = json_in(server_run);
     EXPECT_EQ(la.at("sessions"), 3);
     EXPECT_EQ(lb.at("sessions"), 3);
     EXPECT_EQ(server.at("sessions"), 6);
@@ -109,25 +103,26 @@ TEST(PgTrend, TheServersTrendHoldsEveryStationsSessionsWithTheSameFigures) {
     EXPECT_GT(by_key["dV_max_um"].at("slope_per_year").get<double>(), 0);
 
     // --since keeps the later sessions only.
-    EXPECT_EQ(json_of(bb(a, "trend M-0042 --json --since 2026-03-01 --from " + shq(pg.super()))).at("sessions"), 4);
+    EXPECT_EQ(
+        json_in(ballbar_cli(a, "trend M-0042 --json --since 2026-03-01 --from " + shq(pg.super()))).at("sessions"), 4);
 
     // The PDF: a page a few figures, the machine, the flag.
-    const auto pdf = bb(a, "trend M-0042 --from " + shq(pg.super()) + " --out " + shq(d.file("m42.pdf")));
+    const auto pdf = ballbar_cli(a, "trend M-0042 --from " + shq(pg.super()) + " --out " + shq(d.file("m42.pdf")));
     ASSERT_EQ(pdf.code, 0) << pdf.out;
     const std::string text = sh("pdftotext -layout " + shq(d.file("m42.pdf")) + " -").out;
     EXPECT_NE(text.find("Machine M-0042: trend"), std::string::npos) << text;
     EXPECT_NE(text.find("6 completed sessions"), std::string::npos) << text;
     EXPECT_NE(text.find("SSM |ΔV| largest"), std::string::npos) << text;
-    const auto pdf_b = bb(b, "trend M-0042 --out " + shq(d.file("b.pdf")));
+    const auto pdf_b = ballbar_cli(b, "trend M-0042 --out " + shq(d.file("b.pdf")));
     ASSERT_EQ(pdf_b.code, 0) << pdf_b.out;
     EXPECT_NE(sh("pdftotext -layout " + shq(d.file("b.pdf")) + " -").out.find("drifting toward tolerance"),
               std::string::npos);
 
     // Nothing to plot: said, and the PDF refused (exit 2, no file).
-    const auto none = bb(a, "trend M-9999 --out " + shq(d.file("none.pdf")));
+    const auto none = ballbar_cli(a, "trend M-9999 --out " + shq(d.file("none.pdf")));
     EXPECT_EQ(none.code, 2) << none.out;
     EXPECT_FALSE(std::filesystem::exists(d.file("none.pdf")));
-    EXPECT_EQ(bb(a, "trend M-0042 --since 2026/03/01").code, 2);
+    EXPECT_EQ(ballbar_cli(a, "trend M-0042 --since 2026/03/01").code, 2);
 }
 
 }  // namespace
