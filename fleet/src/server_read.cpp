@@ -7,15 +7,9 @@ namespace ballbar::fleet {
 namespace {
 
 void check_readable(pg::Connection& c) {
-    if (c.exec("SELECT to_regclass('ballbar.schema_info') IS NOT NULL").text(0, 0) != "t")
+    if (server_schema_version(c, "update this ballbar to read it") == 0)
         throw FleetError(FleetError::Kind::server,
                          c.where() + " holds no ballbar data (no schema ballbar): sync a station to it first");
-    const auto version = c.exec("SELECT version FROM ballbar.schema_info WHERE id = 1").integer(0, 0);
-    if (version > kServerSchemaVersion)
-        throw FleetError(FleetError::Kind::newer_schema, c.where() + " holds ballbar's server schema version " +
-                                                             std::to_string(version) + ", newer than this ballbar's (" +
-                                                             std::to_string(kServerSchemaVersion) +
-                                                             "): update this ballbar to read it");
 }
 
 }  // namespace

@@ -463,17 +463,21 @@ class Syncer {
 
 }  // namespace
 
+int server_schema_version(pg::Connection& c, std::string_view advice) {
+    if (c.exec("SELECT to_regclass('ballbar.schema_info') IS NOT NULL").text(0, 0) != "t") return 0;
+    const auto version = static_cast<int>(c.exec("SELECT version FROM ballbar.schema_info WHERE id = 1").integer(0, 0));
+    if (version > kServerSchemaVersion)
+        throw FleetError(FleetError::Kind::newer_schema, c.where() + " holds ballbar's server schema version " +
+                                                             std::to_string(version) + ", newer than this ballbar's (" +
+                                                             std::to_string(kServerSchemaVersion) +
+                                                             "): " + std::string(advice));
+    return version;
+}
+
 int ensure_server_schema(pg::Connection& c) {
     pg::Transaction t(c);
     c.exec("SELECT pg_advisory_xact_lock(" + std::to_string(kSchemaLockKey) + ")");
-    int version = 0;
-    if (c.exec("SELECT to_regclass('ballbar.schema_info') IS NOT NULL").text(0, 0) == "t")
-        version = static_cast<int>(c.exec("SELECT version FROM ballbar.schema_info WHERE id = 1").integer(0, 0));
-    if (version > kServerSchemaVersion)
-        throw FleetError(FleetError::Kind::newer_schema,
-                         c.where() + " holds ballbar's server schema version " + std::to_string(version) +
-                             ", newer than this ballbar's (" + std::to_string(kServerSchemaVersion) +
-                             "): a newer ballbar synced to it; update this station's ballbar");
+    const int version = server_schema_version(c, "a newer ballbar synced to it; update this station's ballbar");
     if (version == kServerSchemaVersion) {
         t.commit();
         return version;

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ballbar/fleet/pg.hpp"
@@ -27,6 +28,10 @@ namespace ballbar::fleet {
 
 /// The server schema this ballbar writes (table ballbar.schema_info). A server with a newer one is refused.
 inline constexpr int kServerSchemaVersion = 1;
+
+/// The version of ballbar's schema on the server (0: none). Throws Kind::newer_schema, naming both
+/// versions and ending with `advice`, for one newer than this ballbar's.
+int server_schema_version(pg::Connection& c, std::string_view advice);
 
 /// Creates the server's schema `ballbar` where it is absent, migrates an older one, refuses a newer one
 /// (Kind::newer_schema). Under an advisory lock: two stations starting at once do it once. Returns the
